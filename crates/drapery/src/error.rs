@@ -1,0 +1,56 @@
+//! The library's error type. Errors are values: the library never prints and never exits.
+
+/// Everything that can go wrong in drapery, with enough context to name the file,
+/// the field or the element at fault.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Bad input in a file: `path` names the file, `message` the field or line at fault.
+    #[error("{path}: {message}")]
+    Input {
+        /// The file (scene, mesh) at fault.
+        path: String,
+        /// What is wrong, naming the field, line or element.
+        message: String,
+    },
+    /// A value given through the library API is out of range or inconsistent.
+    #[error("{0}")]
+    Invalid(String),
+    /// A time step failed: non-finite state, a solver that did not converge, or an energy blow-up.
+    #[error("simulation failed at step {step} (t = {time:.6} s): {reason}")]
+    StepFailed {
+        /// Index of the step that failed (0-based).
+        step: u64,
+        /// Simulated time at the start of that step.
+        time: f64,
+        /// What went wrong and where.
+        reason: String,
+    },
+    /// An I/O error on a named file.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file that could not be read or written.
+        path: String,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+}
+
+impl Error {
+    /// Shorthand for an [`Error::Input`].
+    pub fn input(path: impl std::fmt::Display, message: impl Into<String>) -> Self {
+        Error::Input {
+            path: path.to_string(),
+            message: message.into(),
+        }
+    }
+    /// Shorthand for an [`Error::Io`].
+    pub fn io(path: impl std::fmt::Display, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.to_string(),
+            source,
+        }
+    }
+}
+
+/// Result alias used across the crate.
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,24 @@
+//! # drapery
+//!
+//! A mass-spring cloth simulator advanced by linearized implicit Euler (Baraff & Witkin,
+//! "Large Steps in Cloth Simulation", 1998): stretch, shear and bend springs with damping,
+//! gravity and air drag; a 3×3-block sparse system solved by filtered PCG or sparse Cholesky;
+//! pins as velocity filters.
+//!
+//! Data flows one way: scene → [`model::Model`] → [`integrator::Simulation::step`] → frames out.
+//! The library never prints and never exits: every failure is an [`Error`] value.
+#![warn(missing_docs)]
+#![forbid(unsafe_code)]
+
+pub mod error;
+pub mod integrator;
+pub mod io;
+pub mod math;
+pub mod mesh;
+pub mod model;
+
+pub use error::{Error, Result};
+pub use integrator::{LinearSolver, Simulation, SolverSettings, StepReport};
+pub use math::{Mat3, Vec3};
+pub use mesh::{Face, Mesh};
+pub use model::{ClothDesc, MassSpec, Material, Model};

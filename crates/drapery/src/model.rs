@@ -1,0 +1,393 @@
+//! The simulated system: particles (structure of arrays), springs and per-cloth bookkeeping.
+//!
+//! A [`Model`] is built once from one or more [`ClothDesc`]s; all cloths share one particle
+//! array, each cloth owning a contiguous range of it ([`ClothInfo`]).
+
+use crate::error::{Error, Result};
+use crate::math::Vec3;
+use crate::mesh::Mesh;
+
+/// How particle masses are given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MassSpec {
+    /// The same mass for every vertex, kg.
+    PerVertex(f64),
+    /// Area density in kg/m², lumped to vertices (a third of each triangle's area, quads split in two).
+    Density(f64),
+}
+
+/// Material parameters of one cloth. Stiffness in N/m per spring, damping in N·s/m.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    /// Stiffness of the springs along mesh edges and line elements, N/m.
+    pub stretch_stiffness: f64,
+    /// Stiffness of the quad-diagonal springs, N/m.
+    pub shear_stiffness: f64,
+    /// Stiffness of the bend springs (across shared edges), N/m.
+    pub bend_stiffness: f64,
+    /// Damping along every spring, N·s/m.
+    pub damping: f64,
+    /// Linear air drag per vertex, N·s/m (`f = -c v`).
+    pub air_drag: f64,
+    /// Particle masses.
+    pub mass: MassSpec,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            stretch_stiffness: 1000.0,
+            shear_stiffness: 100.0,
+            bend_stiffness: 1.0,
+            damping: 0.01,
+            air_drag: 0.0,
+            mass: MassSpec::Density(0.1),
+        }
+    }
+}
+
+/// Everything needed to add one cloth to a model.
+#[derive(Clone, Debug)]
+pub struct ClothDesc {
+    /// Unique name (the `o` name in OBJ output).
+    pub name: String,
+    /// Geometry and topology; positions are the rest shape and the initial state.
+    pub mesh: Mesh,
+    /// Material.
+    pub material: Material,
+    /// 0-based vertex indices held in place.
+    pub pins: Vec<u32>,
+    /// Initial velocity of every vertex, m/s.
+    pub initial_velocity: Vec3,
+}
+
+/// What kind of mesh feature a spring was generated from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SpringKind {
+    /// Mesh edge or line element.
+    Stretch,
+    /// Quad diagonal.
+    Shear,
+    /// Across a shared edge.
+    Bend,
+}
+
+/// All springs of the model, as parallel arrays.
+#[derive(Clone, Debug, Default)]
+pub struct Springs {
+    /// First particle.
+    pub i: Vec<u32>,
+    /// Second particle.
+    pub j: Vec<u32>,
+    /// Rest length, m.
+    pub rest: Vec<f64>,
+    /// Stiffness, N/m.
+    pub stiffness: Vec<f64>,
+    /// Damping along the spring, N·s/m.
+    pub damping: Vec<f64>,
+    /// Origin of each spring.
+    pub kind: Vec<SpringKind>,
+}
+
+impl Springs {
+    /// Number of springs.
+    pub fn len(&self) -> usize {
+        self.i.len()
+    }
+    /// True when there are no springs.
+    pub fn is_empty(&self) -> bool {
+        self.i.is_empty()
+    }
+    /// Appends one spring.
+    pub fn push(
+        &mut self,
+        i: u32,
+        j: u32,
+        rest: f64,
+        stiffness: f64,
+        damping: f64,
+        kind: SpringKind,
+    ) {
+        self.i.push(i);
+        self.j.push(j);
+        self.rest.push(rest);
+        self.stiffness.push(stiffness);
+        self.damping.push(damping);
+        self.kind.push(kind);
+    }
+    /// Number of springs of one kind.
+    pub fn count(&self, kind: SpringKind) -> usize {
+        self.kind.iter().filter(|&&k| k == kind).count()
+    }
+}
+
+/// Where one cloth lives in the model.
+#[derive(Clone, Debug)]
+pub struct ClothInfo {
+    /// The cloth's name.
+    pub name: String,
+    /// Index of its first particle.
+    pub offset: usize,
+    /// The input mesh (topology for output; positions = initial state).
+    pub mesh: Mesh,
+}
+
+impl ClothInfo {
+    /// Particle range of this cloth.
+    pub fn range(&self) -> std::ops::Range<usize> {
+        self.offset..self.offset + self.mesh.positions.len()
+    }
+}
+
+/// Particles, springs and external-force parameters.
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// Positions, m.
+    pub x: Vec<Vec3>,
+    /// Velocities, m/s.
+    pub v: Vec<Vec3>,
+    /// Lumped masses, kg (all > 0).
+    pub mass: Vec<f64>,
+    /// Pinned particles keep their position exactly.
+    pub pinned: Vec<bool>,
+    /// Linear air drag coefficient per particle, N·s/m.
+    pub drag: Vec<f64>,
+    /// Springs.
+    pub springs: Springs,
+    /// Gravitational acceleration, m/s².
+    pub gravity: Vec3,
+    /// The cloths, in order.
+    pub cloths: Vec<ClothInfo>,
+}
+
+fn check_nonneg(cloth: &str, field: &str, v: f64) -> Result<()> {
+    if !(v >= 0.0 && v.is_finite()) {
+        return Err(Error::Invalid(format!(
+            "cloth '{cloth}': {field} must be a finite number ≥ 0, got {v}"
+        )));
+    }
+    Ok(())
+}
+
+impl Model {
+    /// Builds the model: validates every cloth, generates springs (stretch, shear, bend; a
+    /// spring with zero stiffness and zero damping is left out), lumps masses and applies pins.
+    pub fn new(cloths: Vec<ClothDesc>, gravity: Vec3) -> Result<Model> {
+        if !gravity.is_finite() {
+            return Err(Error::Invalid("gravity must be finite".into()));
+        }
+        let mut m = Model {
+            x: Vec::new(),
+            v: Vec::new(),
+            mass: Vec::new(),
+            pinned: Vec::new(),
+            drag: Vec::new(),
+            springs: Springs::default(),
+            gravity,
+            cloths: Vec::new(),
+        };
+        for c in cloths {
+            m.add_cloth(c)?;
+        }
+        if m.x.is_empty() {
+            return Err(Error::Invalid(
+                "the model has no particles (no cloth given)".into(),
+            ));
+        }
+        Ok(m)
+    }
+
+    fn add_cloth(&mut self, c: ClothDesc) -> Result<()> {
+        let name = c.name.as_str();
+        if name.is_empty() || name.chars().any(|ch| ch.is_whitespace()) {
+            return Err(Error::Invalid(format!(
+                "cloth name '{name}' must be non-empty and contain no white space"
+            )));
+        }
+        if self.cloths.iter().any(|o| o.name == name) {
+            return Err(Error::Invalid(format!("two cloths are named '{name}'")));
+        }
+        c.mesh.validate(&format!("cloth '{name}' mesh"))?;
+        let mat = &c.material;
+        check_nonneg(name, "stretch_stiffness", mat.stretch_stiffness)?;
+        check_nonneg(name, "shear_stiffness", mat.shear_stiffness)?;
+        check_nonneg(name, "bend_stiffness", mat.bend_stiffness)?;
+        check_nonneg(name, "damping", mat.damping)?;
+        check_nonneg(name, "air_drag", mat.air_drag)?;
+        if !c.initial_velocity.is_finite() {
+            return Err(Error::Invalid(format!(
+                "cloth '{name}': initial_velocity must be finite"
+            )));
+        }
+        let n = c.mesh.positions.len();
+        let masses: Vec<f64> = match mat.mass {
+            MassSpec::PerVertex(mv) => {
+                if !(mv > 0.0 && mv.is_finite()) {
+                    return Err(Error::Invalid(format!(
+                        "cloth '{name}': vertex_mass must be a finite number > 0, got {mv}"
+                    )));
+                }
+                vec![mv; n]
+            }
+            MassSpec::Density(rho) => {
+                if !(rho > 0.0 && rho.is_finite()) {
+                    return Err(Error::Invalid(format!(
+                        "cloth '{name}': density must be a finite number > 0, got {rho}"
+                    )));
+                }
+                let areas = c.mesh.vertex_areas();
+                if let Some(i) = areas.iter().position(|&a| a <= 0.0) {
+                    return Err(Error::Invalid(format!(
+                        "cloth '{name}': vertex {} belongs to no face, so density gives it no mass; use vertex_mass",
+                        i + 1
+                    )));
+                }
+                areas.iter().map(|a| a * rho).collect()
+            }
+        };
+        let offset = self.x.len();
+        let mut pinned = vec![false; n];
+        for &p in &c.pins {
+            if p as usize >= n {
+                return Err(Error::Invalid(format!(
+                    "cloth '{name}': pin {p} is out of range (the mesh has {n} vertices, 0-based)"
+                )));
+            }
+            pinned[p as usize] = true;
+        }
+        let o = offset as u32;
+        let pos = &c.mesh.positions;
+        let mut add = |list: Vec<[u32; 2]>, k: f64, kind: SpringKind, springs: &mut Springs| {
+            if k == 0.0 && mat.damping == 0.0 {
+                return;
+            }
+            for [a, b] in list {
+                let rest = (pos[a as usize] - pos[b as usize]).length();
+                springs.push(a + o, b + o, rest, k, mat.damping, kind);
+            }
+        };
+        add(
+            c.mesh.edges(),
+            mat.stretch_stiffness,
+            SpringKind::Stretch,
+            &mut self.springs,
+        );
+        add(
+            c.mesh.quad_diagonals(),
+            mat.shear_stiffness,
+            SpringKind::Shear,
+            &mut self.springs,
+        );
+        add(
+            c.mesh.bend_pairs(),
+            mat.bend_stiffness,
+            SpringKind::Bend,
+            &mut self.springs,
+        );
+        if let Some(bad) = (0..self.springs.len()).find(|&s| !(self.springs.rest[s] > 0.0)) {
+            return Err(Error::Invalid(format!(
+                "cloth '{name}': spring between vertices {} and {} has zero rest length (coincident vertices)",
+                self.springs.i[bad] - o,
+                self.springs.j[bad] - o
+            )));
+        }
+        self.x.extend_from_slice(pos);
+        self.v.extend(std::iter::repeat_n(c.initial_velocity, n));
+        for (i, v) in self.v[offset..].iter_mut().enumerate() {
+            if pinned[i] {
+                *v = Vec3::ZERO;
+            }
+        }
+        self.mass.extend(masses);
+        self.pinned.extend(pinned);
+        self.drag.extend(std::iter::repeat_n(mat.air_drag, n));
+        self.cloths.push(ClothInfo {
+            name: c.name,
+            offset,
+            mesh: c.mesh,
+        });
+        Ok(())
+    }
+
+    /// Number of particles.
+    pub fn particle_count(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Total mass, kg.
+    pub fn total_mass(&self) -> f64 {
+        self.mass.iter().sum()
+    }
+
+    /// Kinetic energy ½ Σ m |v|².
+    pub fn kinetic_energy(&self) -> f64 {
+        self.mass
+            .iter()
+            .zip(&self.v)
+            .map(|(m, v)| 0.5 * m * v.length_squared())
+            .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid_cloth(mass: MassSpec) -> ClothDesc {
+        ClothDesc {
+            name: "c".into(),
+            mesh: Mesh::grid([1.0, 2.0], [4, 5], Vec3::ZERO, Vec3::Z).unwrap(),
+            material: Material {
+                mass,
+                ..Material::default()
+            },
+            pins: vec![0, 3],
+            initial_velocity: Vec3::X,
+        }
+    }
+
+    #[test]
+    fn density_lumps_total_mass_equal_to_density_times_area() {
+        let m = Model::new(vec![grid_cloth(MassSpec::Density(0.3))], Vec3::ZERO).unwrap();
+        assert!((m.total_mass() - 0.3 * 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn springs_of_each_kind_match_the_mesh_and_rest_lengths_match_geometry() {
+        let m = Model::new(vec![grid_cloth(MassSpec::PerVertex(0.01))], Vec3::ZERO).unwrap();
+        let s = &m.springs;
+        assert_eq!(s.count(SpringKind::Stretch), 3 * 5 + 4 * 4);
+        assert_eq!(s.count(SpringKind::Shear), 2 * 3 * 4);
+        assert_eq!(s.count(SpringKind::Bend), 2 * 5 + 4 * 3);
+        for k in 0..s.len() {
+            let d = (m.x[s.i[k] as usize] - m.x[s.j[k] as usize]).length();
+            assert!((d - s.rest[k]).abs() < 1e-15);
+        }
+        assert!(m.pinned[0] && m.pinned[3] && !m.pinned[1]);
+        assert_eq!(m.v[0], Vec3::ZERO);
+        assert_eq!(m.v[1], Vec3::X);
+    }
+
+    #[test]
+    fn bad_values_are_rejected_with_the_field_named() {
+        let mut c = grid_cloth(MassSpec::PerVertex(0.01));
+        c.material.stretch_stiffness = -1.0;
+        let e = Model::new(vec![c], Vec3::ZERO).unwrap_err().to_string();
+        assert!(e.contains("stretch_stiffness"), "{e}");
+        let mut c = grid_cloth(MassSpec::PerVertex(0.01));
+        c.pins = vec![20];
+        assert!(
+            Model::new(vec![c], Vec3::ZERO)
+                .unwrap_err()
+                .to_string()
+                .contains("pin 20")
+        );
+        let c = grid_cloth(MassSpec::PerVertex(f64::NAN));
+        assert!(
+            Model::new(vec![c], Vec3::ZERO)
+                .unwrap_err()
+                .to_string()
+                .contains("vertex_mass")
+        );
+    }
+}
