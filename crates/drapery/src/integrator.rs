@@ -1,16 +1,33 @@
-//! Linearized implicit Euler (Baraff & Witkin 1998) and its Newton extension.
-//! (Implementation in progress: the API below is the contract.)
+//! Linearized implicit Euler (Baraff & Witkin 1998), MATH.md §1, and its Newton extension.
+//!
+//! One step solves `(M - h D - h² K) Δv = h (f + h K v)` at `(x₀, v₀)`, then
+//! `v₁ = v₀ + Δv`, `x₁ = x₀ + h v₁`. Pinned particles are filtered (MATH.md §5): their
+//! velocity change is prescribed so that they end the step at rest, exactly where they were.
+//!
+//! With `newton_iterations > 1` the step keeps iterating Newton on the incremental potential
+//! `Φ(v) = ½ (v - v₀)ᵀ M (v - v₀) + E(x₀ + h v) + h Ψ(x₀ + h v, v)`
+//! (`Ψ` the dissipation potential of damping and drag). The first iteration is the linearized
+//! step; each iteration backtracks along its direction until `Φ` does not increase.
+//!
+//! A step is transactional: when it fails (non-finite state, linear solver failure, energy
+//! blow-up) the state is restored and an [`Error::StepFailed`] says what and where.
 
-use crate::error::Result;
+use crate::error::{Error, Result};
+use crate::forces::{AirDrag, Force, Gravity, SpringDamping, Springs};
+use crate::linalg::BlockMatrix;
+use crate::linalg::direct::DirectSolver;
+use crate::linalg::pcg::{self, PcgScratch, PcgSettings, Preconditioner};
+use crate::math::{Mat3, Vec3};
 use crate::model::Model;
+use std::time::Instant;
 
-/// Which linear solver handles `(M - h ∂f/∂v - h² ∂f/∂x) Δv = h (f + h ∂f/∂x v)`.
+/// Which linear solver handles the step's system.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum LinearSolver {
     /// Baraff–Witkin filtered PCG with a 3×3 block-Jacobi preconditioner (default).
     #[default]
     Pcg,
-    /// Sparse Cholesky (faer) of the filtered system.
+    /// Sparse Cholesky (faer) of the filtered system; LU when the matrix is not symmetric.
     Direct,
 }
 
@@ -26,8 +43,10 @@ pub struct SolverSettings {
     /// Linear solver (default: PCG).
     pub linear_solver: LinearSolver,
     /// Also put the (non-symmetric) position derivative of spring damping in the matrix
-    /// (default: false, as Baraff & Witkin).
+    /// (default: false, as Baraff & Witkin). Needs `linear_solver = Direct`.
     pub damping_x_jacobian: bool,
+    /// PCG preconditioner (default: block Jacobi).
+    pub preconditioner: Preconditioner,
 }
 
 impl Default for SolverSettings {
@@ -38,7 +57,36 @@ impl Default for SolverSettings {
             max_iterations: 1000,
             linear_solver: LinearSolver::Pcg,
             damping_x_jacobian: false,
+            preconditioner: Preconditioner::BlockJacobi,
         }
+    }
+}
+
+impl SolverSettings {
+    /// Checks ranges and combinations.
+    pub fn validate(&self) -> Result<()> {
+        if self.newton_iterations < 1 {
+            return Err(Error::Invalid(
+                "solver.newton_iterations must be at least 1".into(),
+            ));
+        }
+        if !(self.tolerance > 0.0 && self.tolerance < 1.0) {
+            return Err(Error::Invalid(format!(
+                "solver.tolerance must be in (0, 1), got {}",
+                self.tolerance
+            )));
+        }
+        if self.max_iterations < 1 {
+            return Err(Error::Invalid(
+                "solver.max_iterations must be at least 1".into(),
+            ));
+        }
+        if self.damping_x_jacobian && self.linear_solver != LinearSolver::Direct {
+            return Err(Error::Invalid(
+                "solver.damping_x_jacobian makes the matrix non-symmetric, which conjugate gradient cannot solve: use linear_solver = \"direct\"".into(),
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -47,9 +95,9 @@ impl Default for SolverSettings {
 pub struct StepReport {
     /// Newton iterations taken.
     pub newton_iterations: u32,
-    /// Total (P)CG iterations over the Newton iterations.
+    /// Total (P)CG iterations over the Newton iterations (0 with the direct solver).
     pub cg_iterations: usize,
-    /// Final relative residual of the last linear solve.
+    /// Final relative residual of the last PCG solve (0 with the direct solver).
     pub residual: f64,
     /// Seconds spent assembling forces and matrices.
     pub assembly_seconds: f64,
@@ -67,22 +115,319 @@ pub struct Simulation {
     pub time: f64,
     /// Steps taken so far.
     pub steps: u64,
+    forces: Vec<Box<dyn Force>>,
+    matrix: BlockMatrix,
+    filter: Vec<Mat3>,
+    pcg: PcgScratch,
+    direct: DirectSolver,
 }
 
+/// Ratio of kinetic energies across one step above which the step counts as a blow-up.
+const BLOWUP_RATIO: f64 = 1e4;
+
 impl Simulation {
-    /// Prepares a simulation (matrix pattern, solver scratch).
+    /// Prepares a simulation: builds the forces from the model, the matrix pattern and the
+    /// solver scratch.
     pub fn new(model: Model, settings: SolverSettings) -> Result<Self> {
+        settings.validate()?;
+        let s = &model.springs;
+        let stiff: Vec<usize> = (0..s.len()).filter(|&k| s.stiffness[k] > 0.0).collect();
+        let damped: Vec<usize> = (0..s.len()).filter(|&k| s.damping[k] > 0.0).collect();
+        let mut forces: Vec<Box<dyn Force>> =
+            vec![Box::new(Gravity::new(&model.mass, model.gravity))];
+        if !stiff.is_empty() {
+            forces.push(Box::new(Springs {
+                i: stiff.iter().map(|&k| s.i[k]).collect(),
+                j: stiff.iter().map(|&k| s.j[k]).collect(),
+                rest: stiff.iter().map(|&k| s.rest[k]).collect(),
+                k: stiff.iter().map(|&k| s.stiffness[k]).collect(),
+                clamp_compression: true,
+            }));
+        }
+        if !damped.is_empty() {
+            forces.push(Box::new(SpringDamping {
+                i: damped.iter().map(|&k| s.i[k]).collect(),
+                j: damped.iter().map(|&k| s.j[k]).collect(),
+                c: damped.iter().map(|&k| s.damping[k]).collect(),
+                position_jacobian: settings.damping_x_jacobian,
+            }));
+        }
+        if model.drag.iter().any(|&c| c > 0.0) {
+            forces.push(Box::new(AirDrag {
+                c: model.drag.clone(),
+            }));
+        }
+        let mut pairs = Vec::new();
+        for f in &forces {
+            f.add_pattern(&mut pairs);
+        }
+        let n = model.particle_count();
+        let matrix = BlockMatrix::from_pairs(n, &pairs);
+        let filter = model
+            .pinned
+            .iter()
+            .map(|&p| if p { Mat3::ZERO } else { Mat3::IDENTITY })
+            .collect();
         Ok(Simulation {
             model,
             settings,
             time: 0.0,
             steps: 0,
+            forces,
+            matrix,
+            filter,
+            pcg: PcgScratch::default(),
+            direct: DirectSolver::default(),
         })
     }
 
-    /// Advances by one step of `h` seconds. On error the state is left as it was before the step.
+    /// The forces acting on the model.
+    pub fn forces(&self) -> &[Box<dyn Force>] {
+        &self.forces
+    }
+
+    /// The system matrix of the last Newton iteration.
+    pub fn matrix(&self) -> &BlockMatrix {
+        &self.matrix
+    }
+
+    /// Total force at the current state.
+    pub fn total_force(&self) -> Vec<Vec3> {
+        let mut f = vec![Vec3::ZERO; self.model.particle_count()];
+        for force in &self.forces {
+            force.add_force(&self.model.x, &self.model.v, &mut f);
+        }
+        f
+    }
+
+    /// Potential energy (springs and gravity) at the current positions.
+    pub fn potential_energy(&self) -> f64 {
+        self.forces.iter().map(|f| f.energy(&self.model.x)).sum()
+    }
+
+    /// Kinetic plus potential energy.
+    pub fn total_energy(&self) -> f64 {
+        self.model.kinetic_energy() + self.potential_energy()
+    }
+
+    /// Assembles `A = M - b D - a K` at `(x, v)` (with `a = h²`, `b = h`) into the matrix.
+    fn assemble(&mut self, x: &[Vec3], v: &[Vec3], h: f64) {
+        self.matrix.clear();
+        for (i, m) in self.model.mass.iter().enumerate() {
+            let k = self.matrix.diag_index(i);
+            self.matrix.values[k] = Mat3::from_diagonal(Vec3::splat(*m));
+        }
+        for f in &self.forces {
+            f.add_jacobian(x, v, -h * h, -h, &mut self.matrix);
+        }
+    }
+
+    /// `Φ(v)` of the module docs, for the line search.
+    fn objective(&self, x0: &[Vec3], v0: &[Vec3], v: &[Vec3], h: f64) -> f64 {
+        let x: Vec<Vec3> = x0.iter().zip(v).map(|(a, b)| *a + h * *b).collect();
+        let inertia: f64 = self
+            .model
+            .mass
+            .iter()
+            .zip(v.iter().zip(v0))
+            .map(|(m, (a, b))| 0.5 * m * (*a - *b).length_squared())
+            .sum();
+        inertia
+            + self
+                .forces
+                .iter()
+                .map(|f| f.energy(&x) + h * f.dissipation(&x, v))
+                .sum::<f64>()
+    }
+
+    fn fail(&self, reason: String) -> Error {
+        Error::StepFailed {
+            step: self.steps,
+            time: self.time,
+            reason,
+        }
+    }
+
+    /// Names particle `p` as "vertex N of cloth 'name'".
+    fn particle_name(&self, p: usize) -> String {
+        match self.model.cloths.iter().find(|c| c.range().contains(&p)) {
+            Some(c) => format!("vertex {} of cloth '{}'", p - c.offset, c.name),
+            None => format!("particle {p}"),
+        }
+    }
+
+    /// Advances by one step of `h` seconds. On error the state is left as it was before.
     pub fn step(&mut self, h: f64) -> Result<StepReport> {
-        let _ = h;
-        todo!("implicit step")
+        if !(h > 0.0 && h.is_finite()) {
+            return Err(Error::Invalid(format!(
+                "time step must be a finite number > 0, got {h}"
+            )));
+        }
+        let n = self.model.particle_count();
+        if let Some(p) =
+            (0..n).find(|&i| !(self.model.x[i].is_finite() && self.model.v[i].is_finite()))
+        {
+            return Err(self.fail(format!(
+                "non-finite position or velocity at {} before the step",
+                self.particle_name(p)
+            )));
+        }
+        let x0 = self.model.x.clone();
+        let v0 = self.model.v.clone();
+        let ke0 = self.model.kinetic_energy();
+        let mut report = StepReport::default();
+        let symmetric = !self.settings.damping_x_jacobian;
+        let pcg_settings = PcgSettings {
+            tolerance: self.settings.tolerance,
+            max_iterations: self.settings.max_iterations,
+            preconditioner: self.settings.preconditioner,
+        };
+        // Iterate on v; x = x0 + h v except at the first linearization point (x0, v0).
+        let mut v = v0.clone();
+        let mut x = x0.clone();
+        let mut f = vec![Vec3::ZERO; n];
+        let mut rhs = vec![Vec3::ZERO; n];
+        let mut w = vec![Vec3::ZERO; n];
+        let mut z = vec![Vec3::ZERO; n];
+        let mut dv = vec![Vec3::ZERO; n];
+        let newton = self.settings.newton_iterations;
+        for it in 0..newton {
+            let t0 = Instant::now();
+            f.iter_mut().for_each(|e| *e = Vec3::ZERO);
+            for force in &self.forces {
+                force.add_force(&x, &v, &mut f);
+            }
+            self.assemble(&x, &v, h);
+            // rhs = M (v0 - v) + h f + h K (x0 + h v - x)
+            for i in 0..n {
+                w[i] = x0[i] + h * v[i] - x[i];
+                rhs[i] = self.model.mass[i] * (v0[i] - v[i]) + h * f[i];
+            }
+            let mut kw = vec![Vec3::ZERO; n];
+            for force in &self.forces {
+                force.add_jacobian_product(&x, &v, h, 0.0, &w, &mut kw);
+            }
+            for i in 0..n {
+                rhs[i] += kw[i];
+                z[i] = if self.model.pinned[i] {
+                    -v[i]
+                } else {
+                    Vec3::ZERO
+                };
+                dv[i] = Vec3::ZERO;
+            }
+            report.assembly_seconds += t0.elapsed().as_secs_f64();
+            let t1 = Instant::now();
+            match self.settings.linear_solver {
+                LinearSolver::Pcg => {
+                    let stats = pcg::solve(
+                        &self.matrix,
+                        &rhs,
+                        &self.filter,
+                        &z,
+                        &mut dv,
+                        &pcg_settings,
+                        &mut self.pcg,
+                    );
+                    report.cg_iterations += stats.iterations;
+                    report.residual = stats.relative_residual;
+                    if !stats.converged {
+                        self.restore(x0, v0);
+                        let why = if stats.indefinite {
+                            "the system matrix is not positive definite"
+                        } else {
+                            "conjugate gradient did not converge"
+                        };
+                        return Err(self.fail(format!(
+                            "{why} (Newton iteration {}, {} CG iterations, relative residual {:.3e}, tolerance {:.1e}); try a smaller dt, a larger solver.max_iterations or linear_solver = \"direct\"",
+                            it + 1,
+                            stats.iterations,
+                            stats.relative_residual,
+                            self.settings.tolerance
+                        )));
+                    }
+                }
+                LinearSolver::Direct => {
+                    if let Err(e) =
+                        self.direct
+                            .solve(&self.matrix, &rhs, &self.filter, &z, &mut dv, symmetric)
+                    {
+                        self.restore(x0, v0);
+                        return Err(self.fail(e));
+                    }
+                }
+            }
+            report.solve_seconds += t1.elapsed().as_secs_f64();
+            report.newton_iterations = it + 1;
+            // Full step: v + dv. With more than one iteration, backtrack on Φ.
+            let mut alpha = 1.0;
+            if newton > 1 {
+                let start: Vec<Vec3> = if it == 0 {
+                    vec![Vec3::ZERO; n]
+                } else {
+                    v.clone()
+                };
+                let phi0 = self.objective(&x0, &v0, &start, h);
+                let full: Vec<Vec3> = v.iter().zip(&dv).map(|(a, b)| *a + *b).collect();
+                let mut cand = full.clone();
+                for _ in 0..20 {
+                    if self.objective(&x0, &v0, &cand, h) <= phi0 || !phi0.is_finite() {
+                        break;
+                    }
+                    alpha *= 0.5;
+                    for i in 0..n {
+                        cand[i] = start[i] + alpha * (full[i] - start[i]);
+                    }
+                }
+                v = cand;
+            } else {
+                for i in 0..n {
+                    v[i] += dv[i];
+                }
+            }
+            for i in 0..n {
+                x[i] = x0[i] + h * v[i];
+            }
+            if let Some(p) = (0..n).find(|&i| !(x[i].is_finite() && v[i].is_finite())) {
+                let name = self.particle_name(p);
+                self.restore(x0, v0);
+                return Err(self.fail(format!("non-finite position or velocity at {name}")));
+            }
+            let vmax = v.iter().fold(0.0f64, |m, e| m.max(e.abs().max_element()));
+            let dmax = dv.iter().fold(0.0f64, |m, e| m.max(e.abs().max_element()));
+            if it + 1 < newton
+                && alpha == 1.0
+                && dmax <= 1e-12 * vmax.max(self.model.gravity.length() * h).max(1e-300)
+            {
+                break;
+            }
+        }
+        self.model.x = x;
+        self.model.v = v;
+        let ke1 = self.model.kinetic_energy();
+        let allowance = 0.5 * self.model.total_mass() * (self.model.gravity.length() * h).powi(2);
+        if ke1 > BLOWUP_RATIO * (ke0 + allowance) + 1e-300 {
+            let p = (0..n)
+                .max_by(|&a, &b| {
+                    self.model.v[a]
+                        .length()
+                        .total_cmp(&self.model.v[b].length())
+                })
+                .unwrap_or(0);
+            let name = self.particle_name(p);
+            let speed = self.model.v[p].length();
+            self.restore(x0, v0);
+            return Err(self.fail(format!(
+                "energy blow-up: kinetic energy grew from {ke0:.3e} J to {ke1:.3e} J in one step (fastest: {name} at {speed:.3e} m/s); try a smaller dt or more damping"
+            )));
+        }
+        self.time += h;
+        self.steps += 1;
+        Ok(report)
+    }
+
+    fn restore(&mut self, x0: Vec<Vec3>, v0: Vec<Vec3>) {
+        self.model.x = x0;
+        self.model.v = v0;
     }
 }

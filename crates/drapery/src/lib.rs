@@ -11,8 +11,10 @@
 #![forbid(unsafe_code)]
 
 pub mod error;
+pub mod forces;
 pub mod integrator;
 pub mod io;
+pub mod linalg;
 pub mod math;
 pub mod mesh;
 pub mod model;

@@ -257,7 +257,7 @@ impl Model {
         }
         let o = offset as u32;
         let pos = &c.mesh.positions;
-        let mut add = |list: Vec<[u32; 2]>, k: f64, kind: SpringKind, springs: &mut Springs| {
+        let add = |list: Vec<[u32; 2]>, k: f64, kind: SpringKind, springs: &mut Springs| {
             if k == 0.0 && mat.damping == 0.0 {
                 return;
             }

@@ -1,0 +1,186 @@
+//! Damping along springs, MATH.md §3.
+//!
+//! `u = v_i - v_j`, `f_i = -c (u·n) n = -f_j`, `∂f_i/∂v_i = -c n nᵀ` (symmetric, negative
+//! semi-definite). The position derivative
+//! `∂f_i/∂x_i = -(c/ℓ) [(u·n) I + n uᵀ - 2 (u·n) n nᵀ]` is not symmetric: Baraff & Witkin leave
+//! it out of the matrix, and so does drapery unless `position_jacobian` is set (which then
+//! needs the direct solver's LU).
+
+use super::Force;
+use crate::linalg::BlockMatrix;
+use crate::math::{Mat3, Vec3, outer};
+
+/// Damping on a set of springs.
+#[derive(Clone, Debug)]
+pub struct SpringDamping {
+    /// First particle.
+    pub i: Vec<u32>,
+    /// Second particle.
+    pub j: Vec<u32>,
+    /// Damping coefficient, N·s/m.
+    pub c: Vec<f64>,
+    /// Include `∂f/∂x` in the Jacobian (non-symmetric).
+    pub position_jacobian: bool,
+}
+
+impl SpringDamping {
+    /// Returns `(n, ℓ, u·n)` for spring `s`, or `None` when the spring has no length.
+    #[inline]
+    fn geom(&self, s: usize, x: &[Vec3], v: &[Vec3]) -> Option<(Vec3, f64, Vec3)> {
+        let (i, j) = (self.i[s] as usize, self.j[s] as usize);
+        let d = x[i] - x[j];
+        let l = d.length();
+        if !(l > 1e-300) {
+            return None;
+        }
+        Some((d / l, l, v[i] - v[j]))
+    }
+
+    /// `∂f_i/∂x_i` of spring `s` (the block `-G`).
+    #[inline]
+    fn dfdx(&self, n: Vec3, l: f64, u: Vec3, c: f64) -> Mat3 {
+        let un = u.dot(n);
+        -(c / l) * (Mat3::from_diagonal(Vec3::splat(un)) + outer(n, u) - 2.0 * un * outer(n, n))
+    }
+}
+
+impl Force for SpringDamping {
+    fn name(&self) -> &'static str {
+        "spring damping"
+    }
+    fn dissipation(&self, x: &[Vec3], v: &[Vec3]) -> f64 {
+        (0..self.i.len())
+            .filter_map(|s| {
+                self.geom(s, x, v)
+                    .map(|(n, _, u)| 0.5 * self.c[s] * u.dot(n).powi(2))
+            })
+            .sum()
+    }
+    fn add_force(&self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]) {
+        for s in 0..self.i.len() {
+            if let Some((n, _, u)) = self.geom(s, x, v) {
+                let fs = -self.c[s] * u.dot(n) * n;
+                f[self.i[s] as usize] += fs;
+                f[self.j[s] as usize] -= fs;
+            }
+        }
+    }
+    fn add_pattern(&self, pairs: &mut Vec<(u32, u32)>) {
+        pairs.extend(self.i.iter().zip(&self.j).map(|(&a, &b)| (a, b)));
+    }
+    fn add_jacobian(&self, x: &[Vec3], v: &[Vec3], a: f64, b: f64, m: &mut BlockMatrix) {
+        for s in 0..self.i.len() {
+            let Some((n, l, u)) = self.geom(s, x, v) else {
+                continue;
+            };
+            let (i, j) = (self.i[s] as usize, self.j[s] as usize);
+            // block (i,i) of the combined Jacobian; the others follow by ±.
+            let mut blk = -(b * self.c[s]) * outer(n, n);
+            if self.position_jacobian && a != 0.0 {
+                blk += a * self.dfdx(n, l, u, self.c[s]);
+            }
+            m.add(i, i, blk);
+            m.add(j, j, blk);
+            m.add(i, j, -blk);
+            m.add(j, i, -blk);
+        }
+    }
+    fn add_jacobian_product(
+        &self,
+        x: &[Vec3],
+        v: &[Vec3],
+        a: f64,
+        b: f64,
+        w: &[Vec3],
+        out: &mut [Vec3],
+    ) {
+        for s in 0..self.i.len() {
+            let Some((n, l, u)) = self.geom(s, x, v) else {
+                continue;
+            };
+            let (i, j) = (self.i[s] as usize, self.j[s] as usize);
+            let mut blk = -(b * self.c[s]) * outer(n, n);
+            if self.position_jacobian && a != 0.0 {
+                blk += a * self.dfdx(n, l, u, self.c[s]);
+            }
+            let y = blk * (w[i] - w[j]);
+            out[i] += y;
+            out[j] -= y;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::*;
+    use super::*;
+    use proptest::prelude::*;
+
+    fn vec3(r: f64) -> impl Strategy<Value = Vec3> {
+        (-r..r, -r..r, -r..r).prop_map(|(a, b, c)| Vec3::new(a, b, c))
+    }
+
+    fn config() -> impl Strategy<Value = (Vec<Vec3>, Vec<Vec3>, SpringDamping)> {
+        (
+            prop::collection::vec(vec3(1.0), 3),
+            prop::collection::vec(vec3(5.0), 3),
+            prop::collection::vec(0.01..10.0f64, 3),
+        )
+            .prop_filter("separated", |(x, _, _)| {
+                (x[0] - x[1]).length() > 0.05
+                    && (x[1] - x[2]).length() > 0.05
+                    && (x[0] - x[2]).length() > 0.05
+            })
+            .prop_map(|(x, v, c)| {
+                (
+                    x,
+                    v,
+                    SpringDamping {
+                        i: vec![0, 1, 2],
+                        j: vec![1, 2, 0],
+                        c,
+                        position_jacobian: true,
+                    },
+                )
+            })
+    }
+
+    proptest! {
+        #[test]
+        fn damping_velocity_jacobian_matches_central_differences((x, v, d) in config()) {
+            let got = assembled(&d, &x, &v, 0.0, 1.0);
+            prop_assert!(rel_diff(&got, &fd_jacobian(&d, &x, &v, true)) < 1e-7);
+            for r in 0..9 { for c in 0..9 { prop_assert!((got[r][c] - got[c][r]).abs() < 1e-12 * (1.0 + got[r][c].abs())); } }
+        }
+
+        #[test]
+        fn damping_position_jacobian_matches_central_differences((x, v, d) in config()) {
+            let got = assembled(&d, &x, &v, 1.0, 0.0);
+            let fd = fd_jacobian(&d, &x, &v, false);
+            prop_assert!(rel_diff(&got, &fd) < 1e-6, "{}", rel_diff(&got, &fd));
+            prop_assert!(check_product(&d, &x, &v, 0.3, -2.0, &v) < 1e-12);
+        }
+
+        #[test]
+        fn damping_force_is_minus_the_velocity_gradient_of_the_dissipation((x, v, d) in config()) {
+            let mut f = vec![Vec3::ZERO; 3];
+            d.add_force(&x, &v, &mut f);
+            let mut vp = v.clone();
+            for i in 0..3 { for k in 0..3 {
+                let e = 1e-6;
+                vp[i][k] = v[i][k] + e; let p = d.dissipation(&x, &vp);
+                vp[i][k] = v[i][k] - e; let m = d.dissipation(&x, &vp);
+                vp[i][k] = v[i][k];
+                prop_assert!((-(p - m) / (2.0 * e) - f[i][k]).abs() < 1e-5 * (1.0 + f[i][k].abs()));
+            }}
+        }
+
+        #[test]
+        fn damping_never_adds_energy((x, v, d) in config()) {
+            let mut f = vec![Vec3::ZERO; 3];
+            d.add_force(&x, &v, &mut f);
+            let power: f64 = f.iter().zip(&v).map(|(a, b)| a.dot(*b)).sum();
+            prop_assert!(power <= 1e-12);
+        }
+    }
+}

@@ -1,0 +1,10 @@
+//! Linear algebra for the implicit step: the 3×3-block sparse matrix ([`BlockMatrix`]),
+//! deterministic vector kernels ([`vector`]), the Baraff–Witkin filtered PCG ([`pcg`]) and a
+//! sparse direct solve through faer ([`direct`]).
+
+pub mod bsr;
+pub mod direct;
+pub mod pcg;
+pub mod vector;
+
+pub use bsr::BlockMatrix;

@@ -1,0 +1,76 @@
+//! Vector kernels over `[Vec3]` that give the same bits whatever the thread count.
+//!
+//! Reductions split the input into fixed chunks of [`CHUNK`] items, reduce each chunk
+//! sequentially (possibly on different threads) and add the chunk sums in order, so the
+//! rounding never depends on how rayon schedules the work.
+
+use crate::math::Vec3;
+use rayon::prelude::*;
+
+/// Items per chunk for reductions and parallel loops.
+pub const CHUNK: usize = 2048;
+
+/// `Σ aᵢ · bᵢ`, deterministic.
+pub fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
+    debug_assert_eq!(a.len(), b.len());
+    if a.len() <= CHUNK {
+        return a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum();
+    }
+    let partial: Vec<f64> = a
+        .par_chunks(CHUNK)
+        .zip(b.par_chunks(CHUNK))
+        .map(|(ca, cb)| ca.iter().zip(cb).map(|(x, y)| x.dot(*y)).sum::<f64>())
+        .collect();
+    partial.iter().sum()
+}
+
+/// `‖a‖₂`.
+pub fn norm(a: &[Vec3]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// `y += alpha x`.
+pub fn axpy(alpha: f64, x: &[Vec3], y: &mut [Vec3]) {
+    y.par_chunks_mut(CHUNK)
+        .zip(x.par_chunks(CHUNK))
+        .for_each(|(cy, cx)| {
+            for (yi, xi) in cy.iter_mut().zip(cx) {
+                *yi += alpha * *xi;
+            }
+        });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dot_is_bitwise_identical_on_one_and_two_threads() {
+        let n = 10 * CHUNK + 17;
+        let a: Vec<Vec3> = (0..n)
+            .map(|i| {
+                Vec3::new(
+                    (i as f64).sin(),
+                    1.0 / (1.0 + i as f64),
+                    (i as f64 * 0.37).cos(),
+                )
+            })
+            .collect();
+        let b: Vec<Vec3> = (0..n)
+            .map(|i| Vec3::new((i as f64 * 1.3).cos(), (i as f64).sqrt(), -0.5))
+            .collect();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| dot(&a, &b));
+        let two = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap()
+            .install(|| dot(&a, &b));
+        assert_eq!(one.to_bits(), two.to_bits());
+        let naive: f64 = a.iter().zip(&b).map(|(x, y)| x.dot(*y)).sum();
+        assert!((one - naive).abs() <= 1e-9 * naive.abs().max(1.0));
+    }
+}

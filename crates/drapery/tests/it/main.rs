@@ -1,0 +1,8 @@
+//! Integration tests of the drapery library, gathered in one binary (one link step).
+
+mod common;
+mod determinism;
+mod equilibrium;
+mod implicit_step;
+mod solvers;
+mod three_particles;
