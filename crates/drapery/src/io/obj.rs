@@ -50,7 +50,7 @@ pub fn parse_obj(bytes: &[u8], what: &str) -> Result<Mesh> {
     }
     let text = std::str::from_utf8(bytes).map_err(|e| {
         err(format!(
-            "not a text OBJ file (invalid UTF-8 at offset {})",
+            "not a text OBJ file (binary data: invalid UTF-8 at offset {})",
             e.valid_up_to()
         ))
     })?;
