@@ -162,8 +162,12 @@ fn toml_message(text: &str, e: &toml::de::Error) -> String {
         .split_once('=')
         .map(|(k, _)| k.trim())
         .filter(|k| !k.is_empty() && !k.starts_with('[') && !k.starts_with('#'));
+    let header = line_text.trim();
     match key {
         Some(k) if !msg.contains(k) => format!("line {line}, `{k}`: {msg}"),
+        _ if header.starts_with('[') && header.len() <= 40 => {
+            format!("line {line}, in {header}: {msg}")
+        }
         _ => format!("line {line}: {msg}"),
     }
 }
