@@ -115,14 +115,15 @@ pub fn run(args: RunArgs) -> Result<()> {
         // Reject unavailable formats before anything is loaded or written.
         writer_for(f, &args.output)?;
     }
-    let scene = Scene::load(&args.scene)?;
-    let mut sim = scene.build()?;
+    // Before anything else may start rayon's default pool.
     if let Some(n) = args.threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n as usize)
             .build_global()
             .map_err(|e| anyhow!("cannot start {n} threads: {e}"))?;
     }
+    let scene = Scene::load(&args.scene)?;
+    let mut sim = scene.build()?;
 
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("{}: cannot create the output folder", args.output.display()))?;
