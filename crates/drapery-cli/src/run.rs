@@ -140,7 +140,7 @@ pub fn run(args: RunArgs) -> Result<()> {
     } else {
         let bar = ProgressBar::with_draw_target(Some(frames as u64), ProgressDrawTarget::stderr());
         if let Ok(style) = ProgressStyle::with_template(
-            "{bar:40.cyan/blue} {pos}/{len} frames  t = {msg}  elapsed {elapsed}  ETA {eta}",
+            "{bar:30.cyan/blue} {pos}/{len} frames  t = {msg}  ETA {eta}",
         ) {
             bar.set_style(style);
         }
