@@ -133,6 +133,9 @@ struct GridTable {
     normal: Option<[f64; 3]>,
 }
 
+/// Largest generated grid, in vertices (2²⁴), so that a typo cannot exhaust memory.
+pub const MAX_GRID_VERTICES: usize = 1 << 24;
+
 /// Default gravity, m/s².
 pub const DEFAULT_GRAVITY: [f64; 3] = [0.0, -9.81, 0.0];
 /// Default grid centre, m.
@@ -470,6 +473,13 @@ fn grid_mesh(g: &GridTable, what: &str) -> std::result::Result<Mesh, String> {
                 )
             })?;
     }
+    let vertices = res[0].saturating_mul(res[1]);
+    if vertices > MAX_GRID_VERTICES {
+        return Err(format!(
+            "{what}grid.resolution [{}, {}] gives {vertices} vertices; at most {MAX_GRID_VERTICES} are allowed",
+            res[0], res[1]
+        ));
+    }
     for k in 0..2 {
         positive(what, "grid.size", g.size[k])?;
     }
@@ -577,6 +587,14 @@ pin = [0, 2]
             (
                 format!("{BASE}\n[solver]\nlinear_solver = \"lu\"\n"),
                 "line 14",
+            ),
+            (
+                BASE.replace("resolution = [3, 4]", "resolution = [100000, 100000]"),
+                "at most 16777216",
+            ),
+            (
+                BASE.replace("resolution = [3, 4]", "resolution = [1, 4]"),
+                "≥ 2",
             ),
         ];
         for (text, want) in cases {
