@@ -1,1 +1,44 @@
-fn main() {}
+//! The `drapery` command: run cloth scenes and write frame caches.
+//!
+//! `main` holds only the argument definitions and the dispatch; each subcommand lives in its own
+//! file. Errors are printed as one line, `error: <message>`, with exit code 1; clap's own usage
+//! errors keep clap's exit code 2.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+mod run;
+mod validate;
+
+/// Implicit mass-spring cloth simulation (Baraff & Witkin 1998).
+#[derive(Parser)]
+#[command(name = "drapery", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Simulate a scene and write one file per output frame.
+    Run(run::RunArgs),
+    /// Load and check a scene and its meshes without simulating; print what it holds.
+    Validate(validate::ValidateArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Run(args) => run::run(args),
+        Command::Validate(args) => validate::validate(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // One line, whatever the error chain holds.
+            let msg = format!("{e:#}").replace(['\n', '\r'], " ");
+            eprintln!("error: {msg}");
+            ExitCode::from(1)
+        }
+    }
+}

@@ -1,0 +1,91 @@
+//! `drapery validate SCENE.toml`: load and check everything, simulate nothing, report.
+
+use anyhow::Result;
+use clap::Args;
+use drapery::LinearSolver;
+use drapery::model::SpringKind;
+use drapery::scene::Scene;
+use std::path::PathBuf;
+
+/// Arguments of `drapery validate`.
+#[derive(Args)]
+pub struct ValidateArgs {
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+}
+
+/// Loads the scene, builds the model and prints a summary on stdout.
+pub fn validate(args: ValidateArgs) -> Result<()> {
+    let scene = Scene::load(&args.scene)?;
+    let sim = scene.build()?;
+    let model = &sim.model;
+    let mut out = String::new();
+    out.push_str(&format!("scene {}: ok\n", args.scene.display()));
+    for c in &model.cloths {
+        let range = c.range();
+        let springs: Vec<usize> = (0..model.springs.len())
+            .filter(|&s| range.contains(&(model.springs.i[s] as usize)))
+            .collect();
+        let count = |k: SpringKind| {
+            springs
+                .iter()
+                .filter(|&&s| model.springs.kind[s] == k)
+                .count()
+        };
+        let mass: f64 = model.mass[range.clone()].iter().sum();
+        let pins = model.pinned[range].iter().filter(|&&p| p).count();
+        out.push_str(&format!(
+            "cloth '{}': {} vertices, {} faces, {} line elements, {} springs ({} stretch, {} shear, {} bend), {} pinned, mass {} kg\n",
+            c.name,
+            c.mesh.vertex_count(),
+            c.mesh.faces.len(),
+            c.mesh.lines.len(),
+            springs.len(),
+            count(SpringKind::Stretch),
+            count(SpringKind::Shear),
+            count(SpringKind::Bend),
+            pins,
+            sig(mass),
+        ));
+    }
+    out.push_str("colliders: none\n");
+    out.push_str(&format!(
+        "total: {} cloths, {} vertices, {} springs, mass {} kg\n",
+        model.cloths.len(),
+        model.particle_count(),
+        model.springs.len(),
+        sig(model.total_mass()),
+    ));
+    out.push_str(&format!(
+        "time: duration {} s, frame_rate {} /s, dt {} s (step taken {} s), {} steps per frame, {} frames after frame 0 ({} files), {} steps\n",
+        scene.duration,
+        scene.frame_rate,
+        scene.dt,
+        scene.step_size(),
+        scene.steps_per_frame(),
+        scene.frame_count(),
+        scene.frame_count() + 1,
+        scene.step_count(),
+    ));
+    let s = &scene.solver;
+    out.push_str(&format!(
+        "solver: {}, tolerance {}, max_iterations {}, newton_iterations {}, gravity [{}, {}, {}] m/s²\n",
+        match s.linear_solver {
+            LinearSolver::Pcg => "pcg",
+            LinearSolver::Direct => "direct",
+        },
+        s.tolerance,
+        s.max_iterations,
+        s.newton_iterations,
+        scene.gravity.x,
+        scene.gravity.y,
+        scene.gravity.z,
+    ));
+    print!("{out}");
+    Ok(())
+}
+
+/// `x` rounded to 9 significant digits, printed shortest (0.09999999999999999 → 0.1).
+fn sig(x: f64) -> f64 {
+    format!("{x:.8e}").parse().unwrap_or(x)
+}

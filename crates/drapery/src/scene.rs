@@ -1,0 +1,623 @@
+//! Scene files: TOML, SI units, y up.
+//!
+//! A scene names the time span and step ([`Scene::duration`], [`Scene::dt`],
+//! [`Scene::frame_rate`]), gravity, solver settings and one or more cloths, each from an OBJ mesh
+//! or a generated grid. [`Scene::load`] reads the file and every mesh and checks everything
+//! before anything is simulated; every problem is an [`Error::Input`] naming the file and the
+//! field (or the mesh line) at fault. Unknown keys and tables are errors, so a typo is never
+//! silently ignored.
+//!
+//! ```toml
+//! [simulation]
+//! duration = 2.0                # s, a whole number of frames
+//! dt = 0.005                    # s; 1/(frame_rate*dt) must be a whole number of steps
+//! frame_rate = 50               # frames per simulated second
+//! gravity = [0.0, -9.81, 0.0]   # m/s² (default)
+//!
+//! [solver]                      # optional; defaults shown
+//! newton_iterations = 1
+//! tolerance = 1e-6
+//! max_iterations = 1000
+//! linear_solver = "pcg"         # or "direct"
+//! damping_x_jacobian = false
+//!
+//! [[cloth]]
+//! name = "sheet"
+//! grid = { size = [1.0, 1.0], resolution = [33, 33], center = [0.0, 1.0, 0.0], normal = [0.0, 0.0, 1.0] }
+//! density = 0.1                 # kg/m² (or vertex_mass = kg per vertex)
+//! pin = [0, 32]
+//! ```
+//!
+//! Timing: the number of steps per frame is `round(1/(frame_rate·dt))` and must be whole within
+//! 1e-6 relative and at least 1; the step actually taken is `1/(frame_rate·steps_per_frame)`
+//! (equal to `dt` up to that rounding), so frame `k` is exactly the state at `k/frame_rate`.
+//! `duration·frame_rate` must be a whole number of frames (within 1e-6 relative), at least 1;
+//! frames `0..=frame_count` are produced, frame 0 being the initial state.
+
+use crate::error::{Error, Result};
+use crate::integrator::{LinearSolver, Simulation, SolverSettings};
+use crate::math::Vec3;
+use crate::mesh::Mesh;
+use crate::model::{ClothDesc, MassSpec, Material, Model};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// Relative tolerance for "whole number" checks on steps per frame and frame counts.
+pub const WHOLE_TOLERANCE: f64 = 1e-6;
+
+/// Largest accepted number of steps per frame and of frames (guards against absurd inputs).
+pub const MAX_COUNT: f64 = 1e9;
+
+/// A loaded and validated scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The scene file (as given); meshes are relative to its folder.
+    pub path: PathBuf,
+    /// Simulated time span, s.
+    pub duration: f64,
+    /// Requested step size, s.
+    pub dt: f64,
+    /// Frames written per simulated second.
+    pub frame_rate: f64,
+    /// Gravitational acceleration, m/s² (default `[0, -9.81, 0]`).
+    pub gravity: Vec3,
+    /// Step settings from `[solver]`.
+    pub solver: SolverSettings,
+    /// The cloths, in file order.
+    pub cloths: Vec<ClothDesc>,
+}
+
+// ---------------------------------------------------------------------------------------------
+// File format (serde). Optional fields are `Option` so that presence can be checked.
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    simulation: SimulationTable,
+    #[serde(default)]
+    solver: SolverTable,
+    #[serde(default)]
+    cloth: Vec<ClothTable>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SimulationTable {
+    duration: f64,
+    dt: f64,
+    frame_rate: f64,
+    gravity: Option<[f64; 3]>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct SolverTable {
+    newton_iterations: Option<i64>,
+    tolerance: Option<f64>,
+    max_iterations: Option<i64>,
+    linear_solver: Option<SolverName>,
+    damping_x_jacobian: Option<bool>,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum SolverName {
+    Pcg,
+    Direct,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ClothTable {
+    name: String,
+    mesh: Option<String>,
+    grid: Option<GridTable>,
+    vertex_mass: Option<f64>,
+    density: Option<f64>,
+    stretch_stiffness: Option<f64>,
+    shear_stiffness: Option<f64>,
+    bend_stiffness: Option<f64>,
+    damping: Option<f64>,
+    air_drag: Option<f64>,
+    #[serde(default)]
+    pin: Vec<i64>,
+    initial_velocity: Option<[f64; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GridTable {
+    size: [f64; 2],
+    resolution: [i64; 2],
+    center: Option<[f64; 3]>,
+    normal: Option<[f64; 3]>,
+}
+
+/// Largest generated grid, in vertices (2²⁴), so that a typo cannot exhaust memory.
+pub const MAX_GRID_VERTICES: usize = 1 << 24;
+
+/// Default gravity, m/s².
+pub const DEFAULT_GRAVITY: [f64; 3] = [0.0, -9.81, 0.0];
+/// Default grid centre, m.
+pub const DEFAULT_GRID_CENTER: [f64; 3] = [0.0, 0.0, 0.0];
+/// Default grid normal (a sheet in the x–y plane, row 0 on top).
+pub const DEFAULT_GRID_NORMAL: [f64; 3] = [0.0, 0.0, 1.0];
+
+/// 1-based line number of a byte offset.
+fn line_of(text: &str, offset: usize) -> usize {
+    let end = offset.min(text.len());
+    text.as_bytes()[..end]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
+}
+
+/// Turns a TOML/serde error into one line naming the line and, when it can, the key.
+fn toml_message(text: &str, e: &toml::de::Error) -> String {
+    let msg = e.message().trim().replace('\n', " ");
+    let Some(span) = e.span() else {
+        return msg;
+    };
+    let line = line_of(text, span.start);
+    let line_text = text.lines().nth(line - 1).unwrap_or("");
+    let key = line_text
+        .split_once('=')
+        .map(|(k, _)| k.trim())
+        .filter(|k| !k.is_empty() && !k.starts_with('[') && !k.starts_with('#'));
+    let header = line_text.trim();
+    match key {
+        Some(k) if !msg.contains(k) => format!("line {line}, `{k}`: {msg}"),
+        _ if header.starts_with('[') && header.len() <= 40 => {
+            format!("line {line}, in {header}: {msg}")
+        }
+        _ => format!("line {line}: {msg}"),
+    }
+}
+
+/// A finite number ≥ 0.
+fn nonneg(what: &str, field: &str, v: f64) -> std::result::Result<f64, String> {
+    if v >= 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{what}{field} must be a finite number ≥ 0, got {v}"
+        ))
+    }
+}
+
+/// A finite number > 0.
+fn positive(what: &str, field: &str, v: f64) -> std::result::Result<f64, String> {
+    if v > 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{what}{field} must be a finite number > 0, got {v}"
+        ))
+    }
+}
+
+fn finite3(what: &str, field: &str, v: [f64; 3]) -> std::result::Result<Vec3, String> {
+    if v.iter().all(|c| c.is_finite()) {
+        Ok(Vec3::from_array(v))
+    } else {
+        Err(format!(
+            "{what}{field} must be finite, got [{}, {}, {}]",
+            v[0], v[1], v[2]
+        ))
+    }
+}
+
+/// `round(x)` when `x` is a whole number within [`WHOLE_TOLERANCE`] relative, ≥ 1 and ≤ [`MAX_COUNT`].
+fn whole(x: f64) -> Option<usize> {
+    if !x.is_finite() {
+        return None;
+    }
+    let n = x.round();
+    if n < 1.0 || n > MAX_COUNT || (x - n).abs() > WHOLE_TOLERANCE * n {
+        return None;
+    }
+    Some(n as usize)
+}
+
+impl Scene {
+    /// Reads a scene file and every mesh it names, and validates everything (including building
+    /// the model once, so that whatever [`Model::new`] would reject is reported here).
+    pub fn load(path: &Path) -> Result<Scene> {
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path.display(), e))?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            Error::input(
+                path.display(),
+                format!(
+                    "not a text TOML file (invalid UTF-8 at byte {})",
+                    e.utf8_error().valid_up_to()
+                ),
+            )
+        })?;
+        Scene::from_str(&text, path)
+    }
+
+    /// Parses scene text. `path` names the scene in messages and anchors relative mesh paths;
+    /// meshes are read from disk.
+    pub fn from_str(text: &str, path: &Path) -> Result<Scene> {
+        let file_err = |m: String| Error::input(path.display(), m);
+        if text.contains('\0') {
+            return Err(file_err("not a text TOML file (contains NUL bytes)".into()));
+        }
+        let file: SceneFile = toml::from_str(text).map_err(|e| file_err(toml_message(text, &e)))?;
+        let sim = &file.simulation;
+        let s = "simulation.";
+        let duration = positive(s, "duration", sim.duration).map_err(file_err)?;
+        let dt = positive(s, "dt", sim.dt).map_err(file_err)?;
+        let frame_rate = positive(s, "frame_rate", sim.frame_rate).map_err(file_err)?;
+        let gravity =
+            finite3(s, "gravity", sim.gravity.unwrap_or(DEFAULT_GRAVITY)).map_err(file_err)?;
+        let steps = 1.0 / (frame_rate * dt);
+        if whole(steps).is_none() {
+            return Err(file_err(format!(
+                "simulation: frame_rate × dt must divide 1 (a whole number of steps per frame): \
+                 1/({frame_rate} × {dt}) = {steps}, which is not a whole number ≥ 1 within {WHOLE_TOLERANCE} relative"
+            )));
+        }
+        let frames = duration * frame_rate;
+        if whole(frames).is_none() {
+            return Err(file_err(format!(
+                "simulation.duration must be a whole number ≥ 1 of frames: duration × frame_rate = {duration} × {frame_rate} = {frames}"
+            )));
+        }
+
+        let solver = solver_settings(&file.solver).map_err(file_err)?;
+
+        if file.cloth.is_empty() {
+            return Err(file_err(
+                "no [[cloth]] table: a scene needs at least one cloth".into(),
+            ));
+        }
+        let dir = path.parent().unwrap_or(Path::new(""));
+        let mut cloths: Vec<ClothDesc> = Vec::with_capacity(file.cloth.len());
+        for (i, c) in file.cloth.iter().enumerate() {
+            let what = format!("cloth[{i}] '{}': ", c.name);
+            if c.name.is_empty() || c.name.chars().any(|ch| ch.is_whitespace()) {
+                return Err(file_err(format!(
+                    "{what}name must be non-empty and contain no white space"
+                )));
+            }
+            if let Some(j) = cloths.iter().position(|o| o.name == c.name) {
+                return Err(file_err(format!(
+                    "{what}name is already used by cloth[{j}]"
+                )));
+            }
+            let mesh = match (&c.mesh, &c.grid) {
+                (Some(m), None) => {
+                    let mesh_path = dir.join(m);
+                    crate::io::obj::read_obj(&mesh_path).map_err(|e| match e {
+                        Error::Io { path: p, source } => Error::input(
+                            path.display(),
+                            format!("{what}mesh: cannot read '{p}': {source}"),
+                        ),
+                        other => other,
+                    })?
+                }
+                (None, Some(g)) => grid_mesh(g, &what).map_err(file_err)?,
+                (Some(_), Some(_)) => {
+                    return Err(file_err(format!(
+                        "{what}give either mesh or grid, not both"
+                    )));
+                }
+                (None, None) => {
+                    return Err(file_err(format!(
+                        "{what}missing field `mesh` (an OBJ file) or `grid`"
+                    )));
+                }
+            };
+            let mass = match (c.vertex_mass, c.density) {
+                (Some(m), None) => {
+                    MassSpec::PerVertex(positive(&what, "vertex_mass", m).map_err(file_err)?)
+                }
+                (None, Some(d)) => {
+                    MassSpec::Density(positive(&what, "density", d).map_err(file_err)?)
+                }
+                (Some(_), Some(_)) => {
+                    return Err(file_err(format!(
+                        "{what}give either vertex_mass or density, not both"
+                    )));
+                }
+                (None, None) => {
+                    return Err(file_err(format!(
+                        "{what}missing field `vertex_mass` (kg per vertex) or `density` (kg/m²)"
+                    )));
+                }
+            };
+            let d = Material::default();
+            let field = |name: &str, v: Option<f64>, default: f64| {
+                nonneg(&what, name, v.unwrap_or(default)).map_err(file_err)
+            };
+            let material = Material {
+                stretch_stiffness: field(
+                    "stretch_stiffness",
+                    c.stretch_stiffness,
+                    d.stretch_stiffness,
+                )?,
+                shear_stiffness: field("shear_stiffness", c.shear_stiffness, d.shear_stiffness)?,
+                bend_stiffness: field("bend_stiffness", c.bend_stiffness, d.bend_stiffness)?,
+                damping: field("damping", c.damping, d.damping)?,
+                air_drag: field("air_drag", c.air_drag, d.air_drag)?,
+                mass,
+            };
+            let n = mesh.vertex_count();
+            let mut pins = Vec::with_capacity(c.pin.len());
+            for &p in &c.pin {
+                match u32::try_from(p) {
+                    Ok(q) if (q as usize) < n => pins.push(q),
+                    _ => {
+                        return Err(file_err(format!(
+                            "{what}pin {p} is out of range: the mesh has {n} vertices, numbered 0 to {} (0-based)",
+                            n.saturating_sub(1)
+                        )));
+                    }
+                }
+            }
+            let initial_velocity = finite3(
+                &what,
+                "initial_velocity",
+                c.initial_velocity.unwrap_or([0.0; 3]),
+            )
+            .map_err(file_err)?;
+            cloths.push(ClothDesc {
+                name: c.name.clone(),
+                mesh,
+                material,
+                pins,
+                initial_velocity,
+            });
+        }
+        let scene = Scene {
+            path: path.to_path_buf(),
+            duration,
+            dt,
+            frame_rate,
+            gravity,
+            solver,
+            cloths,
+        };
+        // Whatever the model itself rejects (e.g. density on vertices that belong to no face)
+        // is reported now, before anything is simulated or written.
+        scene.model()?;
+        Ok(scene)
+    }
+
+    /// Steps per output frame: `round(1/(frame_rate·dt))` (checked whole and ≥ 1 at load).
+    pub fn steps_per_frame(&self) -> usize {
+        whole(1.0 / (self.frame_rate * self.dt)).unwrap_or(1)
+    }
+
+    /// Frames after frame 0: `round(duration·frame_rate)` (checked whole and ≥ 1 at load).
+    /// A run writes `frame_count() + 1` frames.
+    pub fn frame_count(&self) -> usize {
+        whole(self.duration * self.frame_rate).unwrap_or(1)
+    }
+
+    /// Total steps of a run: `frame_count() · steps_per_frame()`.
+    pub fn step_count(&self) -> usize {
+        self.frame_count().saturating_mul(self.steps_per_frame())
+    }
+
+    /// The step actually taken, s: `1/(frame_rate·steps_per_frame)`, equal to `dt` up to the
+    /// rounding allowed at load, so that frame `k` falls exactly at `k/frame_rate`.
+    pub fn step_size(&self) -> f64 {
+        1.0 / (self.frame_rate * self.steps_per_frame() as f64)
+    }
+
+    /// Builds the model of the scene. Model errors are reported against the scene file.
+    pub fn model(&self) -> Result<Model> {
+        Model::new(self.cloths.clone(), self.gravity).map_err(|e| self.blame(e))
+    }
+
+    /// Builds the model and the simulation, ready to step with [`Scene::step_size`].
+    pub fn build(&self) -> Result<Simulation> {
+        let model = self.model()?;
+        Simulation::new(model, self.solver).map_err(|e| self.blame(e))
+    }
+
+    fn blame(&self, e: Error) -> Error {
+        match e {
+            Error::Invalid(m) => Error::input(self.path.display(), m),
+            other => other,
+        }
+    }
+}
+
+fn solver_settings(t: &SolverTable) -> std::result::Result<SolverSettings, String> {
+    let d = SolverSettings::default();
+    let newton_iterations = match t.newton_iterations {
+        None => d.newton_iterations,
+        Some(n) => u32::try_from(n).ok().filter(|&n| n >= 1).ok_or_else(|| {
+            format!("solver.newton_iterations must be a whole number ≥ 1, got {n}")
+        })?,
+    };
+    let tolerance = match t.tolerance {
+        None => d.tolerance,
+        Some(v) => positive("solver.", "tolerance", v)?,
+    };
+    let max_iterations = match t.max_iterations {
+        None => d.max_iterations,
+        Some(n) => usize::try_from(n)
+            .ok()
+            .filter(|&n| n >= 1)
+            .ok_or_else(|| format!("solver.max_iterations must be a whole number ≥ 1, got {n}"))?,
+    };
+    let linear_solver = match t.linear_solver {
+        None => d.linear_solver,
+        Some(SolverName::Pcg) => LinearSolver::Pcg,
+        Some(SolverName::Direct) => LinearSolver::Direct,
+    };
+    Ok(SolverSettings {
+        newton_iterations,
+        tolerance,
+        max_iterations,
+        linear_solver,
+        damping_x_jacobian: t.damping_x_jacobian.unwrap_or(d.damping_x_jacobian),
+    })
+}
+
+fn grid_mesh(g: &GridTable, what: &str) -> std::result::Result<Mesh, String> {
+    let mut res = [0usize; 2];
+    for k in 0..2 {
+        res[k] = usize::try_from(g.resolution[k])
+            .ok()
+            .filter(|&r| r >= 2)
+            .ok_or_else(|| {
+                format!(
+                    "{what}grid.resolution must be two whole numbers ≥ 2, got [{}, {}]",
+                    g.resolution[0], g.resolution[1]
+                )
+            })?;
+    }
+    let vertices = res[0].saturating_mul(res[1]);
+    if vertices > MAX_GRID_VERTICES {
+        return Err(format!(
+            "{what}grid.resolution [{}, {}] gives {vertices} vertices; at most {MAX_GRID_VERTICES} are allowed",
+            res[0], res[1]
+        ));
+    }
+    for k in 0..2 {
+        positive(what, "grid.size", g.size[k])?;
+    }
+    let center = finite3(what, "grid.center", g.center.unwrap_or(DEFAULT_GRID_CENTER))?;
+    let normal = finite3(what, "grid.normal", g.normal.unwrap_or(DEFAULT_GRID_NORMAL))?;
+    if normal.length() == 0.0 {
+        return Err(format!("{what}grid.normal must be a non-zero vector"));
+    }
+    Mesh::grid(g.size, res, center, normal).map_err(|e| format!("{what}grid: {e}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BASE: &str = r#"
+[simulation]
+duration = 1
+dt = 0.01
+frame_rate = 25
+
+[[cloth]]
+name = "sheet"
+grid = { size = [1, 2], resolution = [3, 4] }
+vertex_mass = 0.01
+pin = [0, 2]
+"#;
+
+    fn load(text: &str) -> Result<Scene> {
+        Scene::from_str(text, Path::new("dir/s.toml"))
+    }
+
+    #[test]
+    fn defaults_and_integer_numbers_are_accepted() {
+        let s = load(BASE).unwrap();
+        assert_eq!(s.steps_per_frame(), 4);
+        assert_eq!(s.frame_count(), 25);
+        assert_eq!(s.step_count(), 100);
+        assert_eq!(s.gravity, Vec3::new(0.0, -9.81, 0.0));
+        assert_eq!(s.solver, SolverSettings::default());
+        assert_eq!(s.cloths[0].mesh.vertex_count(), 12);
+        assert_eq!(s.cloths[0].material.stretch_stiffness, 1000.0);
+        assert_eq!(s.cloths[0].pins, vec![0, 2]);
+        assert!((s.step_size() - 0.01).abs() < 1e-15);
+    }
+
+    fn err(text: &str) -> String {
+        load(text).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn unknown_fields_and_tables_are_errors_naming_the_line() {
+        let e = err(&BASE.replace("vertex_mass", "vertex_mas"));
+        assert!(
+            e.starts_with("dir/s.toml: line 10") && e.contains("vertex_mas"),
+            "{e}"
+        );
+        let e = err(&format!("{BASE}\n[collision]\nthickness = 1\n"));
+        assert!(e.contains("collision"), "{e}");
+        let e = err(&BASE.replace("dt = 0.01\n", ""));
+        assert!(e.contains("missing field `dt`"), "{e}");
+    }
+
+    #[test]
+    fn non_physical_values_are_named() {
+        let cases = [
+            (BASE.replace("dt = 0.01", "dt = 0"), "simulation.dt"),
+            (BASE.replace("dt = 0.01", "dt = -1"), "simulation.dt"),
+            (
+                BASE.replace("dt = 0.01", "dt = 0.003"),
+                "whole number of steps",
+            ),
+            (
+                BASE.replace("duration = 1", "duration = 1.01"),
+                "simulation.duration",
+            ),
+            (
+                BASE.replace("pin = [0, 2]", "pin = [0, 12]"),
+                "cloth[0] 'sheet': pin 12 is out of range",
+            ),
+            (
+                BASE.replace("pin = [0, 2]", "stretch_stiffness = -1"),
+                "cloth[0] 'sheet': stretch_stiffness must be a finite number ≥ 0, got -1",
+            ),
+            (
+                BASE.replace("vertex_mass = 0.01", "vertex_mass = -0.01"),
+                "vertex_mass",
+            ),
+            (
+                BASE.replace("vertex_mass = 0.01", "vertex_mass = 0.01\ndensity = 1"),
+                "not both",
+            ),
+            (
+                BASE.replace("name = \"sheet\"", "name = \"a b\""),
+                "white space",
+            ),
+            (
+                format!("{BASE}\n[solver]\ntolerance = 0\n"),
+                "solver.tolerance",
+            ),
+            (
+                format!("{BASE}\n[solver]\nmax_iterations = 0\n"),
+                "solver.max_iterations",
+            ),
+            (
+                format!("{BASE}\n[solver]\nlinear_solver = \"lu\"\n"),
+                "line 14",
+            ),
+            (
+                BASE.replace("resolution = [3, 4]", "resolution = [100000, 100000]"),
+                "at most 16777216",
+            ),
+            (
+                BASE.replace("resolution = [3, 4]", "resolution = [1, 4]"),
+                "≥ 2",
+            ),
+        ];
+        for (text, want) in cases {
+            let e = err(&text);
+            assert!(
+                e.starts_with("dir/s.toml: ") && e.contains(want),
+                "{e:?} lacks {want:?}"
+            );
+        }
+        let two = format!("{BASE}{}", &BASE[BASE.find("[[cloth]]").unwrap()..]);
+        assert!(err(&two).contains("cloth[1] 'sheet': name is already used by cloth[0]"));
+    }
+
+    #[test]
+    fn missing_mesh_names_the_scene_the_cloth_and_the_mesh() {
+        let text = BASE.replace(
+            "grid = { size = [1, 2], resolution = [3, 4] }",
+            "mesh = \"nope.obj\"",
+        );
+        let e = err(&text);
+        assert!(
+            e.starts_with("dir/s.toml: cloth[0] 'sheet': mesh: cannot read 'dir/nope.obj'"),
+            "{e}"
+        );
+    }
+}
