@@ -4,15 +4,36 @@
 
 use drapery::math::Vec3;
 use drapery::mesh::Mesh;
-use drapery::model::{ClothDesc, Material, MassSpec, Model};
+use drapery::model::{ClothDesc, MassSpec, Material, Model};
 use drapery::{Simulation, SolverSettings};
 use std::time::Instant;
 
 fn hanging(n: usize, tolerance: f64) -> Simulation {
     let mesh = Mesh::grid([1.0, 1.0], [n, n], Vec3::new(0.0, 1.0, 0.0), Vec3::Z).unwrap();
-    let material = Material { stretch_stiffness: 1000.0, shear_stiffness: 100.0, bend_stiffness: 1.0, damping: 0.01, air_drag: 0.0, mass: MassSpec::Density(0.1) };
-    let cloth = ClothDesc { name: "sheet".into(), mesh, material, pins: vec![0, (n - 1) as u32], initial_velocity: Vec3::ZERO };
-    Simulation::new(Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0)).unwrap(), SolverSettings { tolerance, max_iterations: 20000, ..Default::default() }).unwrap()
+    let material = Material {
+        stretch_stiffness: 1000.0,
+        shear_stiffness: 100.0,
+        bend_stiffness: 1.0,
+        damping: 0.01,
+        air_drag: 0.0,
+        mass: MassSpec::Density(0.1),
+    };
+    let cloth = ClothDesc {
+        name: "sheet".into(),
+        mesh,
+        material,
+        pins: vec![0, (n - 1) as u32],
+        initial_velocity: Vec3::ZERO,
+    };
+    Simulation::new(
+        Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0)).unwrap(),
+        SolverSettings {
+            tolerance,
+            max_iterations: 20000,
+            ..Default::default()
+        },
+    )
+    .unwrap()
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -22,7 +43,10 @@ fn median(v: &mut [f64]) -> f64 {
 
 fn main() {
     let h = 1.0 / 60.0;
-    println!("{:>8} {:>9} {:>9} {:>11} {:>11} {:>11} {:>9}", "grid", "vertices", "tolerance", "step ms", "assembly", "solve", "CG iters");
+    println!(
+        "{:>8} {:>9} {:>9} {:>11} {:>11} {:>11} {:>9}",
+        "grid", "vertices", "tolerance", "step ms", "assembly", "solve", "CG iters"
+    );
     for (n, tolerance) in [(64usize, 1e-3), (64, 1e-6), (128, 1e-3), (128, 1e-6)] {
         let mut sim = hanging(n, tolerance);
         let steps = if n <= 64 { 60 } else { 30 };

@@ -457,6 +457,7 @@ fn solver_settings(t: &SolverTable) -> std::result::Result<SolverSettings, Strin
         max_iterations,
         linear_solver,
         damping_x_jacobian: t.damping_x_jacobian.unwrap_or(d.damping_x_jacobian),
+        ..d
     })
 }
 
