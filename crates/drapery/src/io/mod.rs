@@ -1,6 +1,8 @@
 //! File formats, one file per format. Every writer goes through [`write_atomic`]: a file is
 //! written whole (temporary file in the same folder, then rename) or not at all.
 
+pub mod ply;
+
 use crate::error::{Error, Result};
 use std::io::Write;
 use std::path::Path;
