@@ -2,6 +2,7 @@
 //! written whole (temporary file in the same folder, then rename) or not at all.
 
 pub mod ply;
+pub mod usd;
 
 use crate::error::{Error, Result};
 use std::io::Write;
