@@ -16,6 +16,7 @@ pub mod io;
 pub mod math;
 pub mod mesh;
 pub mod model;
+pub mod render;
 
 pub use error::{Error, Result};
 pub use integrator::{LinearSolver, Simulation, SolverSettings, StepReport};

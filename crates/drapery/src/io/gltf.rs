@@ -620,7 +620,7 @@ fn parse_glb(data: &[u8]) -> R<GlbScene> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::io::usd::tests::animated;
 
