@@ -49,7 +49,7 @@ struct Builder {
 
 impl Builder {
     fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut v = json!({
@@ -318,7 +318,7 @@ pub fn glb_bytes(
         root["animations"] =
             json!([{ "name": "drapery", "channels": channels, "samplers": samplers }]);
     }
-    while b.bin.len() % 4 != 0 {
+    while !b.bin.len().is_multiple_of(4) {
         b.bin.push(0);
     }
     root["buffers"] = json!([{ "byteLength": b.bin.len() }]);
@@ -326,7 +326,7 @@ pub fn glb_bytes(
     root["accessors"] = Value::Array(b.accessors);
     let mut js = serde_json::to_vec(&root)
         .map_err(|e| Error::Invalid(format!("{what}: cannot encode glTF JSON: {e}")))?;
-    while js.len() % 4 != 0 {
+    while !js.len().is_multiple_of(4) {
         js.push(b' ');
     }
     let total = 12 + 8 + js.len() + 8 + b.bin.len();

@@ -218,7 +218,7 @@ pub fn read_usda(path: &Path) -> Result<UsdaStage> {
 }
 
 fn parse_numbers(s: &str) -> std::result::Result<Vec<f64>, String> {
-    s.split(|c: char| c == ',' || c == '(' || c == ')' || c == '[' || c == ']')
+    s.split([',', '(', ')', '[', ']'])
         .map(str::trim)
         .filter(|t| !t.is_empty())
         .map(|t| t.parse::<f64>().map_err(|_| format!("bad number '{t}'")))

@@ -116,7 +116,7 @@ impl Camera {
 
 impl View {
     /// View-space coordinates: (right, up, depth along forward).
-    pub fn to_view(&self, p: Vec3) -> Vec3 {
+    pub fn to_view(self, p: Vec3) -> Vec3 {
         let d = p - self.eye;
         Vec3::new(d.dot(self.right), d.dot(self.up), d.dot(self.forward))
     }
