@@ -3,11 +3,12 @@
 // Prints nothing and exits 0 when every file has zero errors; otherwise prints each error
 // (and the issue counts) and exits 1. Warnings and infos are printed only with VERBOSE=1.
 import { readFileSync } from "node:fs";
-import { basename } from "node:path";
+import { basename, resolve } from "node:path";
 import { createRequire } from "node:module";
 
 const require = createRequire(import.meta.url);
-const validator = require(process.env.GLTF_VALIDATOR_MODULE || "gltf-validator");
+const mod = process.env.GLTF_VALIDATOR_MODULE;
+const validator = require(mod ? resolve(mod) : "gltf-validator");
 
 let failed = false;
 for (const file of process.argv.slice(2)) {
