@@ -18,6 +18,7 @@ pub mod linalg;
 pub mod math;
 pub mod mesh;
 pub mod model;
+pub mod render;
 pub mod scene;
 
 pub use error::{Error, Result};

@@ -1,7 +1,10 @@
 //! File formats, one file per format. Every writer goes through [`write_atomic`]: a file is
 //! written whole (temporary file in the same folder, then rename) or not at all.
 
+pub mod gltf;
 pub mod obj;
+pub mod ply;
+pub mod usd;
 
 use crate::error::{Error, Result};
 use std::io::Write;

@@ -1,0 +1,65 @@
+"""Open a .usda written by drapery with Pixar's USD library and read every frame back.
+
+Usage: python3 usd_check.py FILE.usda
+Checks: the stage opens, has a default prim, y up, metres, start/end time codes and
+timeCodesPerSecond are set, and every Mesh has `points` at every integer time code from
+start to end with the same point count at each, faceVertexIndices in range, and
+faceVertexCounts summing to the number of indices. Prints nothing and exits 0 on success;
+prints the problems and exits 1 otherwise.
+"""
+
+import sys
+
+from pxr import Usd, UsdGeom
+
+
+def check(path):
+    problems = []
+    stage = Usd.Stage.Open(path)
+    if stage is None:
+        return [f"{path}: Usd.Stage.Open failed"]
+    if not stage.GetDefaultPrim():
+        problems.append("no default prim")
+    if UsdGeom.GetStageUpAxis(stage) != UsdGeom.Tokens.y:
+        problems.append(f"up axis is {UsdGeom.GetStageUpAxis(stage)}, not Y")
+    if UsdGeom.GetStageMetersPerUnit(stage) != 1.0:
+        problems.append(f"metersPerUnit is {UsdGeom.GetStageMetersPerUnit(stage)}, not 1")
+    if not (stage.HasAuthoredTimeCodeRange() and stage.GetTimeCodesPerSecond() > 0):
+        problems.append("no authored time code range or timeCodesPerSecond")
+    start, end = int(stage.GetStartTimeCode()), int(stage.GetEndTimeCode())
+    meshes = [UsdGeom.Mesh(p) for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
+    if not meshes:
+        problems.append("no Mesh prims")
+    for mesh in meshes:
+        name = mesh.GetPath()
+        points_attr = mesh.GetPointsAttr()
+        samples = points_attr.GetTimeSamples()
+        if [int(t) for t in samples] != list(range(start, end + 1)):
+            problems.append(f"{name}: points time samples {samples[:5]}... do not cover {start}..{end}")
+        counts = list(mesh.GetFaceVertexCountsAttr().Get() or [])
+        indices = list(mesh.GetFaceVertexIndicesAttr().Get() or [])
+        if sum(counts) != len(indices):
+            problems.append(f"{name}: faceVertexCounts sum {sum(counts)} != {len(indices)} indices")
+        n = None
+        for t in range(start, end + 1):
+            pts = points_attr.Get(Usd.TimeCode(t))
+            if pts is None:
+                problems.append(f"{name}: no points at time code {t}")
+                continue
+            if n is None:
+                n = len(pts)
+            elif len(pts) != n:
+                problems.append(f"{name}: {len(pts)} points at time code {t}, {n} at {start}")
+        if n is not None and indices and max(indices) >= n:
+            problems.append(f"{name}: face index {max(indices)} >= point count {n}")
+    return [f"{path}: {p}" for p in problems]
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        print("usage: usd_check.py FILE.usda", file=sys.stderr)
+        sys.exit(2)
+    errs = check(sys.argv[1])
+    for e in errs:
+        print(e, file=sys.stderr)
+    sys.exit(1 if errs else 0)
