@@ -115,6 +115,9 @@ pub struct Simulation {
     pub time: f64,
     /// Steps taken so far.
     pub steps: u64,
+    /// The previous step's velocity change, the PCG's initial guess for the next step (part of
+    /// the state: save and restore it to resume a run bit for bit).
+    pub warm_start: Vec<Vec3>,
     forces: Vec<Box<dyn Force>>,
     matrix: BlockMatrix,
     filter: Vec<Mat3>,
@@ -169,6 +172,7 @@ impl Simulation {
             .map(|&p| if p { Mat3::ZERO } else { Mat3::IDENTITY })
             .collect();
         Ok(Simulation {
+            warm_start: vec![Vec3::ZERO; n],
             model,
             settings,
             time: 0.0,
@@ -420,6 +424,9 @@ impl Simulation {
             return Err(self.fail(format!(
                 "energy blow-up: kinetic energy grew from {ke0:.3e} J to {ke1:.3e} J in one step (fastest: {name} at {speed:.3e} m/s); try a smaller dt or more damping"
             )));
+        }
+        for i in 0..n {
+            self.warm_start[i] = self.model.v[i] - v0[i];
         }
         self.time += h;
         self.steps += 1;
