@@ -14,10 +14,11 @@
 //!   `f(t) = (x₁-x₀)·((x₂-x₀)×(x₃-x₀))`, found by splitting `[0, 1]` at the roots of `f'` and
 //!   bisecting every monotone piece with a sign change (no closed form), followed by the
 //!   "inside" test `distance(t) ≤ tol` with the exact closest-point routines of
-//!   [`super::distance`]. Guard: when the cubic is (numerically) identically zero (coplanar
-//!   motion, zero-area triangle, parallel edges) or comes near zero without changing sign
-//!   (grazing), the query also runs conservative advancement with gap `tol` and keeps the earlier
-//!   answer, so those cases are not missed.
+//!   [`super::distance`]. Guards: the breakpoints where `|f|` comes within rounding/tolerance of
+//!   zero without a sign change (grazing: the point touches the plane and leaves) are candidates
+//!   too; and when `|f|` stays that small over the whole step (coplanar motion, zero-area
+//!   triangle, parallel edges) the query is answered by conservative advancement with gap `tol`
+//!   instead, so those cases are not missed.
 //! * [`vertex_triangle_gap_toi`] / [`edge_edge_gap_toi`]: the first time the distance drops to a
 //!   gap `δ > 0` (thickness-aware CCD), by conservative advancement. The distance is Lipschitz in
 //!   `t` with constant `L` = the largest relative speed between a particle of one primitive and
@@ -242,43 +243,40 @@ fn toi(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> Option<f64> {
     let eps_f = 64.0 * f64::EPSILON * len[0] * len[1] * len[2];
     let degenerate = c.iter().all(|ck| ck.abs() <= eps_f);
 
-    let mut best: Option<f64> = None;
-    let mut near_zero = degenerate;
-    if !degenerate {
-        let mut breaks = vec![0.0];
-        breaks.extend(quadratic_roots_in_unit(3.0 * c[3], 2.0 * c[2], c[1]));
-        breaks.push(1.0);
-        // |f| = |e₁ × e₂| × (distance between the two planes through e₁, e₂) ≤ |e₁||e₂| × it:
-        // small |f| at a breakpoint (where |f| is locally smallest) means a possible grazing
-        let graze = eps_f.max(len[0] * len[1] * tol);
-        let mut candidates = Vec::new();
-        for w in breaks.windows(2) {
-            let (l, r) = (w[0], w[1]);
-            let (fl, fr) = (eval(&c, l), eval(&c, r));
-            if fl.abs() <= graze || fr.abs() <= graze {
-                near_zero = true;
-            }
-            if fl == 0.0 {
-                candidates.push(l);
-            } else if fr == 0.0 {
-                candidates.push(r);
-            } else if (fl > 0.0) != (fr > 0.0) {
-                candidates.push(bisect(&c, l, r, fl));
-            }
-        }
-        candidates.sort_by(f64::total_cmp);
-        best = candidates
-            .into_iter()
-            .find(|&t| distance_at(kind, x0, x1, t) <= tol);
+    if degenerate {
+        return advance(kind, x0, x1, tol, 0.0);
     }
-    if near_zero {
-        if let Some(t) = advance(kind, x0, x1, tol, 0.0) {
-            if best.is_none_or(|b| t < b) {
-                best = Some(t);
-            }
+    let mut breaks = vec![0.0];
+    breaks.extend(quadratic_roots_in_unit(3.0 * c[3], 2.0 * c[2], c[1]));
+    breaks.push(1.0);
+    // |f| = |e₁ × e₂| × (distance between the parallel planes through e₁ and e₂, one of which
+    // contains the other primitive's point) ≤ |e₁||e₂| × that distance. |f| is extremal at the
+    // breakpoints, so a breakpoint with |f| ≤ `graze` is a possible grazing contact (touching
+    // the plane without crossing), and |f| ≤ `graze` at every breakpoint means the motion stays
+    // coplanar within the tolerance throughout: then only the distance itself can tell.
+    let graze = eps_f.max(len[0] * len[1] * tol);
+    let values: Vec<f64> = breaks.iter().map(|&t| eval(&c, t)).collect();
+    if values.iter().all(|v| v.abs() <= graze) {
+        return advance(kind, x0, x1, tol, 0.0);
+    }
+    let mut candidates = Vec::new();
+    for k in 0..breaks.len() - 1 {
+        let (l, r) = (breaks[k], breaks[k + 1]);
+        let (fl, fr) = (values[k], values[k + 1]);
+        if fl.abs() <= graze {
+            candidates.push(l);
+        }
+        if fr.abs() <= graze {
+            candidates.push(r);
+        }
+        if fl != 0.0 && fr != 0.0 && (fl > 0.0) != (fr > 0.0) {
+            candidates.push(bisect(&c, l, r, fl));
         }
     }
-    best
+    candidates.sort_by(f64::total_cmp);
+    candidates
+        .into_iter()
+        .find(|&t| distance_at(kind, x0, x1, t) <= tol)
 }
 
 #[cfg(test)]
