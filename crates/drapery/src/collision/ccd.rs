@@ -127,13 +127,13 @@ fn advance(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], gap: f64, slack: f64) -> 
         return Some(0.0);
     }
     let l = lipschitz(kind, x0, x1);
-    if !(l > 0.0) {
+    if l <= 0.0 {
         return None;
     }
     for _ in 0..MAX_ADVANCE_ITERS {
         // The distance cannot reach `gap` before `t + (d - gap) / L`.
         let next = t + (d - gap) / l;
-        if !(next < 1.0) {
+        if next >= 1.0 {
             return None;
         }
         t = next;

@@ -179,7 +179,7 @@ impl TriangleMesh {
                 count: 0,
             };
             let empty = Node {
-                aabb: aabb,
+                aabb,
                 first: 0,
                 count: 0,
             };

@@ -7,10 +7,12 @@
 //!
 //! * [`broad_phase`] finds vertex–triangle and edge–edge candidates from swept boxes;
 //! * [`distance`] gives closest points and the barycentric weights of a contact;
+//! * [`proximity`] turns candidates into contact stencils (particle indices and weights);
 //! * [`repulsion`] turns a close pair into forces and a 12×12 Jacobian (MATH.md §4);
 //! * [`ccd`] finds the earliest time of impact over a step, so nothing passes through;
 //! * [`colliders`] describes analytic and mesh obstacles with rigid motion;
-//! * [`check`] counts intersecting triangle pairs and penetrating vertices (a test oracle).
+//! * [`check`] counts intersecting triangle pairs and penetrating vertices (a test oracle),
+//!   with the exact orientation tests of [`predicates`].
 
 pub mod broad_phase;
 pub mod ccd;
@@ -18,4 +20,5 @@ pub mod check;
 pub mod colliders;
 pub mod distance;
 pub mod predicates;
+pub mod proximity;
 pub mod repulsion;

@@ -100,7 +100,8 @@ pub fn repulsion(
     let k = penalty.stiffness;
     let u = x[0] * w[0] + x[1] * w[1] + x[2] * w[2] + x[3] * w[3];
     let d = u.length();
-    if !(eta > 0.0 && k > 0.0 && eta.is_finite() && k.is_finite()) || !(d < eta) {
+    let valid = eta > 0.0 && k > 0.0 && eta.is_finite() && k.is_finite();
+    if !valid || d.is_nan() || d >= eta {
         return Repulsion {
             dist: d,
             ..Repulsion::ZERO
