@@ -10,6 +10,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod collision;
 pub mod error;
 pub mod forces;
 pub mod integrator;

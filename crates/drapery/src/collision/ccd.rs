@@ -1,0 +1,608 @@
+//! Continuous collision detection for linearly moving points over one step, `t ∈ [0, 1]`.
+//!
+//! Stencils are four particles given at the start (`x0`) and end (`x1`) of the step, moving on
+//! straight lines `x(t) = x0 + t (x1 - x0)`:
+//!
+//! * vertex–triangle: `[p, a, b, c]`;
+//! * edge–edge: `[p0, p1, q0, q1]`.
+//!
+//! Two kinds of query:
+//!
+//! * [`vertex_triangle_toi`] / [`edge_edge_toi`]: the earliest time of impact, i.e. the first
+//!   time the primitives touch (distance `≤ tol`). The four points are coplanar at any impact, so
+//!   the candidates are the real roots in `[0, 1]` of the coplanarity cubic
+//!   `f(t) = (x₁-x₀)·((x₂-x₀)×(x₃-x₀))`, found by splitting `[0, 1]` at the roots of `f'` and
+//!   bisecting every monotone piece with a sign change (no closed form), followed by the
+//!   "inside" test `distance(t) ≤ tol` with the exact closest-point routines of
+//!   [`super::distance`]. Guards: the breakpoints where `|f|` comes within rounding/tolerance of
+//!   zero without a sign change (grazing: the point touches the plane and leaves) are candidates
+//!   too; and when `|f|` stays that small over the whole step (coplanar motion, zero-area
+//!   triangle, parallel edges) the query is answered by conservative advancement with gap `tol`
+//!   instead, so those cases are not missed.
+//! * [`vertex_triangle_gap_toi`] / [`edge_edge_gap_toi`]: the first time the distance drops to a
+//!   gap `δ > 0` (thickness-aware CCD), by conservative advancement. The distance is Lipschitz in
+//!   `t` with constant `L` = the largest relative speed between a particle of one primitive and
+//!   one of the other, so stepping by `(d - δ)/L` never passes the first crossing. The answer is
+//!   never later than the true first time `distance ≤ δ`; the distance at the reported time is
+//!   at most `δ (1 + 1e-3)` plus rounding. If the iteration cap (grazing at a distance barely
+//!   above `δ`) is hit, the current time is returned: conservative, a possible false positive,
+//!   never a miss.
+//!
+//! Conventions: `None` means no contact during the step. A contact already present at `t = 0`
+//! gives `Some(0.0)`. Non-finite input gives `Some(0.0)` (conservative). Tolerances are
+//! absolute lengths; a rounding slack of `1e-12 ×` the size of the configuration is added.
+
+use super::distance::{point_triangle, segment_segment};
+use crate::math::Vec3;
+
+/// Iteration cap of conservative advancement.
+const MAX_ADVANCE_ITERS: usize = 4096;
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Kind {
+    VertexTriangle,
+    EdgeEdge,
+}
+
+/// Earliest time in `[0, 1]` at which the moving point `x[0]` touches the moving triangle
+/// `x[1] x[2] x[3]` (distance `≤ tol`), or `None`.
+pub fn vertex_triangle_toi(x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> Option<f64> {
+    toi(Kind::VertexTriangle, x0, x1, tol)
+}
+
+/// Earliest time in `[0, 1]` at which the moving edges `x[0] x[1]` and `x[2] x[3]` touch
+/// (distance `≤ tol`), or `None`.
+pub fn edge_edge_toi(x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> Option<f64> {
+    toi(Kind::EdgeEdge, x0, x1, tol)
+}
+
+/// First time in `[0, 1]` at which the distance between the moving point `x[0]` and the moving
+/// triangle `x[1] x[2] x[3]` drops to `gap` (conservative, see the module docs), or `None`.
+pub fn vertex_triangle_gap_toi(x0: &[Vec3; 4], x1: &[Vec3; 4], gap: f64) -> Option<f64> {
+    advance(Kind::VertexTriangle, x0, x1, gap.max(0.0), slack(x0, x1))
+}
+
+/// First time in `[0, 1]` at which the distance between the moving edges `x[0] x[1]` and
+/// `x[2] x[3]` drops to `gap` (conservative, see the module docs), or `None`.
+pub fn edge_edge_gap_toi(x0: &[Vec3; 4], x1: &[Vec3; 4], gap: f64) -> Option<f64> {
+    advance(Kind::EdgeEdge, x0, x1, gap.max(0.0), slack(x0, x1))
+}
+
+/// Positions at time `t`.
+fn at(x0: &[Vec3; 4], x1: &[Vec3; 4], t: f64) -> [Vec3; 4] {
+    std::array::from_fn(|i| x0[i] + (x1[i] - x0[i]) * t)
+}
+
+/// Distance between the two primitives at time `t`.
+fn distance_at(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], t: f64) -> f64 {
+    let x = at(x0, x1, t);
+    match kind {
+        Kind::VertexTriangle => point_triangle(x[0], x[1], x[2], x[3]).dist,
+        Kind::EdgeEdge => segment_segment(x[0], x[1], x[2], x[3]).dist,
+    }
+}
+
+/// Size of the configuration (relative vectors at both ends), for rounding slacks.
+fn size(x0: &[Vec3; 4], x1: &[Vec3; 4]) -> f64 {
+    (1..4).fold(0.0f64, |m, i| {
+        m.max((x0[i] - x0[0]).length())
+            .max((x1[i] - x1[0]).length())
+    })
+}
+
+fn slack(x0: &[Vec3; 4], x1: &[Vec3; 4]) -> f64 {
+    1e-12 * size(x0, x1)
+}
+
+fn finite(x0: &[Vec3; 4], x1: &[Vec3; 4]) -> bool {
+    x0.iter().chain(x1.iter()).all(|v| v.is_finite())
+}
+
+/// Upper bound on `|d distance / dt|`: the largest relative speed between a particle of the
+/// first primitive and one of the second.
+fn lipschitz(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4]) -> f64 {
+    let v: [Vec3; 4] = std::array::from_fn(|i| x1[i] - x0[i]);
+    let (first, second): (&[usize], &[usize]) = match kind {
+        Kind::VertexTriangle => (&[0], &[1, 2, 3]),
+        Kind::EdgeEdge => (&[0, 1], &[2, 3]),
+    };
+    let mut l = 0.0f64;
+    for &i in first {
+        for &j in second {
+            l = l.max((v[i] - v[j]).length());
+        }
+    }
+    l
+}
+
+/// Conservative advancement to the first time the distance is `≤ gap` (within the band).
+fn advance(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], gap: f64, slack: f64) -> Option<f64> {
+    if !finite(x0, x1) || gap.is_nan() {
+        return Some(0.0);
+    }
+    let accept = gap * (1.0 + 1e-3) + slack;
+    let mut t = 0.0;
+    let mut d = distance_at(kind, x0, x1, t);
+    if d <= accept {
+        return Some(0.0);
+    }
+    let l = lipschitz(kind, x0, x1);
+    if l <= 0.0 {
+        return None;
+    }
+    for _ in 0..MAX_ADVANCE_ITERS {
+        // The distance cannot reach `gap` before `t + (d - gap) / L`.
+        let next = t + (d - gap) / l;
+        if next >= 1.0 {
+            return None;
+        }
+        t = next;
+        d = distance_at(kind, x0, x1, t);
+        if d <= accept {
+            return Some(t);
+        }
+    }
+    Some(t)
+}
+
+/// Scalar triple product `u · (v × w)`.
+fn triple(u: Vec3, v: Vec3, w: Vec3) -> f64 {
+    u.dot(v.cross(w))
+}
+
+/// The coplanarity cubic `f(t) = Σ cₖ tᵏ` as a triple product `e₁ · (e₂ × w)` of two edge
+/// vectors (short) and one connecting vector (possibly long: fast motion), which keeps the
+/// rounding error proportional to `|e₁| |e₂| |w|`. Returns the coefficients `[c0, c1, c2, c3]`
+/// and the rounding scale `max|e₁| max|e₂| max|w|` over the step.
+fn coplanarity_cubic(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4]) -> ([f64; 4], [f64; 3]) {
+    // (origin, tip) of the three vectors
+    let idx: [(usize, usize); 3] = match kind {
+        // (b - a) · ((c - a) × (p - a))
+        Kind::VertexTriangle => [(1, 2), (1, 3), (1, 0)],
+        // (p1 - p0) · ((q0 - p0) × (q1 - q0))
+        Kind::EdgeEdge => [(0, 1), (0, 2), (2, 3)],
+    };
+    let a: [Vec3; 3] = idx.map(|(o, i)| x0[i] - x0[o]);
+    let e: [Vec3; 3] = idx.map(|(o, i)| x1[i] - x1[o]);
+    let b: [Vec3; 3] = std::array::from_fn(|i| e[i] - a[i]);
+    let len: [f64; 3] = std::array::from_fn(|i| a[i].length().max(e[i].length()));
+    (
+        [
+            triple(a[0], a[1], a[2]),
+            triple(b[0], a[1], a[2]) + triple(a[0], b[1], a[2]) + triple(a[0], a[1], b[2]),
+            triple(a[0], b[1], b[2]) + triple(b[0], a[1], b[2]) + triple(b[0], b[1], a[2]),
+            triple(b[0], b[1], b[2]),
+        ],
+        len,
+    )
+}
+
+fn eval(c: &[f64; 4], t: f64) -> f64 {
+    ((c[3] * t + c[2]) * t + c[1]) * t + c[0]
+}
+
+/// Real roots of `a t² + b t + c` strictly inside `(0, 1)`, computed without cancellation.
+fn quadratic_roots_in_unit(a: f64, b: f64, c: f64) -> Vec<f64> {
+    let mut r = Vec::with_capacity(2);
+    let scale = a.abs().max(b.abs()).max(c.abs());
+    if scale == 0.0 {
+        return r;
+    }
+    if a.abs() <= 1e-14 * scale {
+        if b != 0.0 {
+            r.push(-c / b);
+        }
+    } else {
+        let disc = b * b - 4.0 * a * c;
+        if disc >= 0.0 {
+            let q = -0.5 * (b + b.signum() * disc.sqrt());
+            if q != 0.0 {
+                r.push(q / a);
+                r.push(c / q);
+            } else {
+                r.push(0.0); // b = 0 and c = 0: double root at 0
+            }
+        } else if disc > -1e-14 * b * b {
+            r.push(-b / (2.0 * a)); // touching double root lost to rounding
+        }
+    }
+    r.retain(|t| *t > 0.0 && *t < 1.0);
+    r.sort_by(f64::total_cmp);
+    r
+}
+
+/// Bisect a sign change of `f` on `[lo, hi]`; returns the left end of the final bracket.
+fn bisect(c: &[f64; 4], mut lo: f64, mut hi: f64, flo: f64) -> f64 {
+    let slo = flo > 0.0;
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if !(mid > lo && mid < hi) {
+            break;
+        }
+        let fm = eval(c, mid);
+        if fm == 0.0 {
+            return mid;
+        }
+        if (fm > 0.0) == slo {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+fn toi(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> Option<f64> {
+    if !finite(x0, x1) || tol.is_nan() {
+        return Some(0.0);
+    }
+    let s = size(x0, x1);
+    let tol = tol.max(0.0) + 1e-12 * s;
+    let (c, len) = coplanarity_cubic(kind, x0, x1);
+    // rounding level of the cubic's coefficients
+    let eps_f = 64.0 * f64::EPSILON * len[0] * len[1] * len[2];
+    let degenerate = c.iter().all(|ck| ck.abs() <= eps_f);
+
+    if degenerate {
+        return advance(kind, x0, x1, tol, 0.0);
+    }
+    let mut breaks = vec![0.0];
+    breaks.extend(quadratic_roots_in_unit(3.0 * c[3], 2.0 * c[2], c[1]));
+    breaks.push(1.0);
+    // |f| = |e₁ × e₂| × (distance between the parallel planes through e₁ and e₂, one of which
+    // contains the other primitive's point) ≤ |e₁||e₂| × that distance. |f| is extremal at the
+    // breakpoints, so a breakpoint with |f| ≤ `graze` is a possible grazing contact (touching
+    // the plane without crossing), and |f| ≤ `graze` at every breakpoint means the motion stays
+    // coplanar within the tolerance throughout: then only the distance itself can tell.
+    let graze = eps_f.max(len[0] * len[1] * tol);
+    let values: Vec<f64> = breaks.iter().map(|&t| eval(&c, t)).collect();
+    if values.iter().all(|v| v.abs() <= graze) {
+        return advance(kind, x0, x1, tol, 0.0);
+    }
+    let mut candidates = Vec::new();
+    for k in 0..breaks.len() - 1 {
+        let (l, r) = (breaks[k], breaks[k + 1]);
+        let (fl, fr) = (values[k], values[k + 1]);
+        if fl.abs() <= graze {
+            candidates.push(l);
+        }
+        if fr.abs() <= graze {
+            candidates.push(r);
+        }
+        if fl != 0.0 && fr != 0.0 && (fl > 0.0) != (fr > 0.0) {
+            candidates.push(bisect(&c, l, r, fl));
+        }
+    }
+    candidates.sort_by(f64::total_cmp);
+    candidates
+        .into_iter()
+        .find(|&t| distance_at(kind, x0, x1, t) <= tol)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    const TOL: f64 = 1e-9;
+
+    fn tri() -> [Vec3; 3] {
+        [Vec3::ZERO, Vec3::X, Vec3::Y]
+    }
+
+    fn vt(p0: Vec3, p1: Vec3, t0: [Vec3; 3], t1: [Vec3; 3]) -> ([Vec3; 4], [Vec3; 4]) {
+        ([p0, t0[0], t0[1], t0[2]], [p1, t1[0], t1[1], t1[2]])
+    }
+
+    #[test]
+    fn point_through_static_triangle() {
+        let (a, b) = vt(
+            Vec3::new(0.25, 0.25, 1.0),
+            Vec3::new(0.25, 0.25, -1.0),
+            tri(),
+            tri(),
+        );
+        let t = vertex_triangle_toi(&a, &b, TOL).unwrap();
+        assert!((t - 0.5).abs() < 1e-12, "{t}");
+        let g = vertex_triangle_gap_toi(&a, &b, 0.1).unwrap();
+        assert!(g <= 0.45 + 1e-12 && g > 0.449, "{g}");
+    }
+
+    #[test]
+    fn exact_touching_at_end_of_step() {
+        let (a, b) = vt(
+            Vec3::new(0.25, 0.25, 1.0),
+            Vec3::new(0.25, 0.25, 0.0),
+            tri(),
+            tri(),
+        );
+        let t = vertex_triangle_toi(&a, &b, 0.0).unwrap();
+        assert!((t - 1.0).abs() < 1e-9, "{t}");
+        // edges: crossing exactly at t = 1
+        let a = [
+            Vec3::new(-1.0, 0.0, 1.0),
+            Vec3::new(1.0, 0.0, 1.0),
+            -Vec3::Y,
+            Vec3::Y,
+        ];
+        let b = [
+            Vec3::new(-1.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            -Vec3::Y,
+            Vec3::Y,
+        ];
+        let t = edge_edge_toi(&a, &b, 0.0).unwrap();
+        assert!((t - 1.0).abs() < 1e-9, "{t}");
+    }
+
+    #[test]
+    fn very_fast_point_through_triangle() {
+        for speed in [1e3, 1e6, 1e8] {
+            let (a, b) = vt(
+                Vec3::new(0.2, 0.3, 0.3 * speed),
+                Vec3::new(0.2, 0.3, -0.7 * speed),
+                tri(),
+                tri(),
+            );
+            let t = vertex_triangle_toi(&a, &b, TOL).unwrap();
+            assert!((t - 0.3).abs() < 1e-9, "{speed}: {t}");
+            // oblique and fast
+            let (a, b) = vt(
+                Vec3::new(0.2 - 0.5 * speed, 0.3, 0.5 * speed),
+                Vec3::new(0.2 + 0.5 * speed, 0.3, -0.5 * speed),
+                tri(),
+                tri(),
+            );
+            let t = vertex_triangle_toi(&a, &b, TOL).unwrap();
+            assert!((t - 0.5).abs() < 1e-9, "{speed}: {t}");
+        }
+    }
+
+    #[test]
+    fn parallel_edges_sliding_into_each_other() {
+        // collinear edges sliding along their common line
+        let a = [
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::new(3.0, 0.0, 0.0),
+            Vec3::new(4.0, 0.0, 0.0),
+        ];
+        let b = [
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::new(0.5, 0.0, 0.0),
+            Vec3::new(1.5, 0.0, 0.0),
+        ];
+        let t = edge_edge_toi(&a, &b, TOL).unwrap();
+        assert!((t - 0.8).abs() < 1e-6, "{t}");
+        // parallel edges approaching sideways
+        let a = [
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::new(0.2, 1.0, 0.0),
+            Vec3::new(1.2, 1.0, 0.0),
+        ];
+        let b = [
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::new(0.2, -1.0, 0.0),
+            Vec3::new(1.2, -1.0, 0.0),
+        ];
+        let t = edge_edge_toi(&a, &b, TOL).unwrap();
+        assert!((t - 0.5).abs() < 1e-6, "{t}");
+        // parallel edges passing by at a distance: nothing
+        let a = [
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::new(3.0, 0.1, 0.0),
+            Vec3::new(4.0, 0.1, 0.0),
+        ];
+        let b = [
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::new(-3.0, 0.1, 0.0),
+            Vec3::new(-2.0, 0.1, 0.0),
+        ];
+        assert_eq!(edge_edge_toi(&a, &b, TOL), None);
+        assert!(edge_edge_gap_toi(&a, &b, 0.2).is_some());
+        assert_eq!(edge_edge_gap_toi(&a, &b, 0.05), None);
+    }
+
+    #[test]
+    fn point_grazing_an_edge() {
+        // crosses the plane exactly on the edge y = 0
+        let (a, b) = vt(
+            Vec3::new(0.5, -0.5, 1.0),
+            Vec3::new(0.5, 0.5, -1.0),
+            tri(),
+            tri(),
+        );
+        assert!((vertex_triangle_toi(&a, &b, TOL).unwrap() - 0.5).abs() < 1e-9);
+        // moves parallel to the plane, touching the edge y = 0 from below at one instant
+        // (cubic without sign change: double root)
+        let (a, b) = vt(
+            Vec3::new(0.5, -1.0, 0.0),
+            Vec3::new(0.5, -1.0, 0.0),
+            tri(),
+            tri().map(|v| v - Vec3::Y),
+        );
+        let t = vertex_triangle_toi(&a, &b, TOL).unwrap();
+        assert!((t - 1.0).abs() < 1e-6, "{t}");
+        // point skimming over the triangle, out of plane, tangent to the plane at t = 0.5
+        let p = |t: f64| Vec3::new(0.3, 0.3, (t - 0.5) * (t - 0.5));
+        // not linear: approximate by a tangent line touching at t = 0.5 (z stays 0)
+        let (a, b) = vt(p(0.5) - Vec3::X * 0.2, p(0.5) + Vec3::X * 0.2, tri(), tri());
+        assert!(vertex_triangle_toi(&a, &b, TOL).is_some());
+        // a point in the plane sliding into the triangle from outside
+        let (a, b) = vt(
+            Vec3::new(-1.0, 0.25, 0.0),
+            Vec3::new(1.0, 0.25, 0.0),
+            tri(),
+            tri(),
+        );
+        let t = vertex_triangle_toi(&a, &b, TOL).unwrap();
+        assert!((t - 0.5).abs() < 1e-6, "{t}");
+    }
+
+    #[test]
+    fn degenerate_triangles() {
+        // zero-area triangle (a segment from (0,0,0) to (1,0,0)) hit by a point
+        let seg = [Vec3::ZERO, Vec3::X, Vec3::X * 0.5];
+        let (a, b) = vt(
+            Vec3::new(0.3, 0.0, 1.0),
+            Vec3::new(0.3, 0.0, -1.0),
+            seg,
+            seg,
+        );
+        let t = vertex_triangle_toi(&a, &b, TOL).unwrap();
+        assert!((t - 0.5).abs() < 1e-6, "{t}");
+        // all vertices equal
+        let pt = [Vec3::ONE; 3];
+        let (a, b) = vt(Vec3::ZERO, Vec3::ONE * 2.0, pt, pt);
+        assert!((vertex_triangle_toi(&a, &b, TOL).unwrap() - 0.5).abs() < 1e-6);
+        let (a, b) = vt(Vec3::ZERO, Vec3::new(2.0, 2.0, 1.0), pt, pt);
+        assert_eq!(vertex_triangle_toi(&a, &b, TOL), None);
+        // zero-length edges
+        let a = [Vec3::ZERO, Vec3::ZERO, Vec3::Z, Vec3::Z];
+        let b = [Vec3::ZERO, Vec3::ZERO, -Vec3::Z, -Vec3::Z];
+        assert!((edge_edge_toi(&a, &b, TOL).unwrap() - 0.5).abs() < 1e-6);
+        // non-finite input is reported conservatively
+        let mut c = a;
+        c[0].x = f64::NAN;
+        assert_eq!(edge_edge_toi(&c, &b, TOL), Some(0.0));
+    }
+
+    #[test]
+    fn coplanar_motion_without_contact_and_motion_that_stays_away() {
+        // point moving in the triangle's plane, passing beside it
+        let (a, b) = vt(
+            Vec3::new(-1.0, -0.5, 0.0),
+            Vec3::new(2.0, -0.5, 0.0),
+            tri(),
+            tri(),
+        );
+        assert_eq!(vertex_triangle_toi(&a, &b, TOL), None);
+        // point crossing the plane outside the triangle
+        let (a, b) = vt(
+            Vec3::new(0.8, 0.8, 1.0),
+            Vec3::new(0.8, 0.8, -1.0),
+            tri(),
+            tri(),
+        );
+        assert_eq!(vertex_triangle_toi(&a, &b, TOL), None);
+        // both move together (no relative motion)
+        let d = Vec3::new(5.0, -3.0, 2.0);
+        let (a, b) = vt(
+            Vec3::new(0.2, 0.2, 0.1),
+            Vec3::new(0.2, 0.2, 0.1) + d,
+            tri(),
+            tri().map(|v| v + d),
+        );
+        assert_eq!(vertex_triangle_toi(&a, &b, TOL), None);
+        assert_eq!(vertex_triangle_gap_toi(&a, &b, 0.05), None);
+        assert_eq!(vertex_triangle_gap_toi(&a, &b, 0.2), Some(0.0));
+        // skew edges passing each other
+        let a = [
+            Vec3::new(-1.0, 0.0, 1.0),
+            Vec3::new(1.0, 0.0, 1.0),
+            Vec3::new(2.0, -1.0, 0.0),
+            Vec3::new(2.0, 1.0, 0.0),
+        ];
+        let b = [
+            Vec3::new(-1.0, 0.0, -1.0),
+            Vec3::new(1.0, 0.0, -1.0),
+            Vec3::new(2.0, -1.0, 0.0),
+            Vec3::new(2.0, 1.0, 0.0),
+        ];
+        assert_eq!(edge_edge_toi(&a, &b, TOL), None);
+    }
+
+    fn v3(r: f64) -> impl Strategy<Value = Vec3> {
+        (-r..r, -r..r, -r..r).prop_map(|(x, y, z)| Vec3::new(x, y, z))
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+
+        #[test]
+        fn straight_passes_through_triangle_interior_are_detected(
+            t0 in prop::array::uniform3(v3(1.0)),
+            dt in prop::array::uniform3(v3(1.0)),
+            moving in any::<bool>(),
+            b1 in 0.0..1.0f64, b2 in 0.0..1.0f64,
+            tstar in 0.0..1.0f64,
+            dir in v3(1.0),
+            speed_exp in -3.0..6.0f64,
+        ) {
+            let t1: [Vec3; 3] = if moving { std::array::from_fn(|i| t0[i] + dt[i]) } else { t0 };
+            let tri_at = |t: f64| -> [Vec3; 3] { std::array::from_fn(|i| t0[i].lerp(t1[i], t)) };
+            let area = |x: [Vec3; 3]| (x[1] - x[0]).cross(x[2] - x[0]).length();
+            prop_assume!(area(tri_at(tstar)) > 1e-3);
+            prop_assume!(dir.length() > 1e-2);
+            let (b1, b2) = (b1.min(b2), b1.max(b2));
+            let bary = [b1, b2 - b1, 1.0 - b2];
+            let x = tri_at(tstar);
+            let hit = x[0] * bary[0] + x[1] * bary[1] + x[2] * bary[2];
+            let v = dir.normalize() * 10f64.powf(speed_exp);
+            let p0 = hit - v * tstar;
+            let p1 = hit + v * (1.0 - tstar);
+            let a = [p0, t0[0], t0[1], t0[2]];
+            let b = [p1, t1[0], t1[1], t1[2]];
+            let toi = vertex_triangle_toi(&a, &b, TOL);
+            prop_assert!(toi.is_some(), "missed: tstar={tstar}");
+            let t = toi.unwrap();
+            prop_assert!(t <= tstar + 1e-9, "t={t} tstar={tstar}");
+            let d = distance_at(Kind::VertexTriangle, &a, &b, t);
+            prop_assert!(d <= TOL + 1e-11 * (1.0 + v.length()), "d={d} at t={t}");
+        }
+
+        #[test]
+        fn crossing_edges_are_detected(
+            e0 in prop::array::uniform2(v3(1.0)),
+            de in prop::array::uniform2(v3(1.0)),
+            s in 0.0..1.0f64, u in 0.0..1.0f64,
+            tstar in 0.0..1.0f64,
+            dir in v3(1.0),
+            vel in v3(1.0),
+            speed_exp in -3.0..6.0f64,
+        ) {
+            let e1 = [e0[0] + de[0], e0[1] + de[1]];
+            let pa = |t: f64| [e0[0].lerp(e1[0], t), e0[1].lerp(e1[1], t)];
+            prop_assume!((pa(tstar)[1] - pa(tstar)[0]).length() > 1e-3 && dir.length() > 1e-2);
+            let hit = pa(tstar)[0].lerp(pa(tstar)[1], s);
+            let q = [hit - dir * u, hit + dir * (1.0 - u)];
+            let v = vel * 10f64.powf(speed_exp);
+            let a = [e0[0], e0[1], q[0] - v * tstar, q[1] - v * tstar];
+            let b = [e1[0], e1[1], q[0] + v * (1.0 - tstar), q[1] + v * (1.0 - tstar)];
+            let toi = edge_edge_toi(&a, &b, TOL);
+            prop_assert!(toi.is_some(), "missed: tstar={tstar}");
+            let t = toi.unwrap();
+            prop_assert!(t <= tstar + 1e-9, "t={t} tstar={tstar}");
+            let d = distance_at(Kind::EdgeEdge, &a, &b, t);
+            prop_assert!(d <= TOL + 1e-11 * (1.0 + v.length()), "d={d} at t={t}");
+        }
+
+        #[test]
+        fn gap_toi_is_conservative(
+            a in prop::array::uniform4(v3(1.0)),
+            b in prop::array::uniform4(v3(1.0)),
+            gap in 0.01..0.3f64,
+            ee in any::<bool>(),
+        ) {
+            let kind = if ee { Kind::EdgeEdge } else { Kind::VertexTriangle };
+            let r = if ee { edge_edge_gap_toi(&a, &b, gap) } else { vertex_triangle_gap_toi(&a, &b, gap) };
+            // dense sampling: first sampled time with distance < gap
+            let n = 2000;
+            let first = (0..=n).map(|i| i as f64 / n as f64)
+                .find(|&t| distance_at(kind, &a, &b, t) < gap);
+            match r {
+                None => prop_assert!(first.is_none(), "missed contact at {first:?}"),
+                Some(t) => {
+                    if let Some(f) = first { prop_assert!(t <= f + 1e-12); }
+                    let d = distance_at(kind, &a, &b, t);
+                    prop_assert!(d <= gap * 1.001 + 1e-9, "d={d} gap={gap}");
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,24 @@
+//! Collision geometry: closest points, penalty repulsion, continuous collision detection,
+//! broad phase, obstacle shapes and an intersection checker.
+//!
+//! Everything here is pure geometry on `f64` positions: no state, no printing, no panics on
+//! degenerate input (zero-length edges and zero-area triangles are handled explicitly and never
+//! produce NaN from finite input). The implicit step wires these pieces together:
+//!
+//! * [`broad_phase`] finds vertex–triangle and edge–edge candidates from swept boxes;
+//! * [`distance`] gives closest points and the barycentric weights of a contact;
+//! * [`proximity`] turns candidates into contact stencils (particle indices and weights);
+//! * [`repulsion`] turns a close pair into forces and a 12×12 Jacobian (MATH.md §4);
+//! * [`ccd`] finds the earliest time of impact over a step, so nothing passes through;
+//! * [`colliders`] describes analytic and mesh obstacles with rigid motion;
+//! * [`check`] counts intersecting triangle pairs and penetrating vertices (a test oracle),
+//!   with the exact orientation tests of [`predicates`].
+
+pub mod broad_phase;
+pub mod ccd;
+pub mod check;
+pub mod colliders;
+pub mod distance;
+pub mod predicates;
+pub mod proximity;
+pub mod repulsion;
