@@ -12,12 +12,16 @@
 //! A step is transactional: when it fails (non-finite state, linear solver failure, energy
 //! blow-up) the state is restored and an [`Error::StepFailed`] says what and where.
 
+use crate::collision::broad_phase::candidates;
+use crate::collision::proximity::proximities;
+use crate::collision::repulsion::Penalty;
+use crate::collision::response::{self, ObstacleContact};
 use crate::error::{Error, Result};
-use crate::forces::{AirDrag, Force, Gravity, SpringDamping, Springs};
+use crate::forces::{AirDrag, Force, Gravity, Repulsions, SpringDamping, Springs};
 use crate::linalg::BlockMatrix;
 use crate::linalg::direct::DirectSolver;
 use crate::linalg::pcg::{self, PcgScratch, PcgSettings, Preconditioner};
-use crate::math::{Mat3, Vec3};
+use crate::math::{Mat3, Vec3, outer};
 use crate::model::Model;
 use std::time::Instant;
 
@@ -103,6 +107,14 @@ pub struct StepReport {
     pub assembly_seconds: f64,
     /// Seconds spent in the linear solver.
     pub solve_seconds: f64,
+    /// Seconds spent finding contacts and in the collision fail-safe.
+    pub collision_seconds: f64,
+    /// Particles held against obstacles in the solve.
+    pub obstacle_contacts: usize,
+    /// Cloth–cloth repulsion stencils in the solve.
+    pub self_contacts: usize,
+    /// Pairs the continuous collision fail-safe had to stop.
+    pub ccd_hits: usize,
 }
 
 /// A model plus the solver's working memory. Advance it with [`Simulation::step`].
@@ -119,6 +131,10 @@ pub struct Simulation {
     /// the state: save and restore it to resume a run bit for bit).
     pub warm_start: Vec<Vec3>,
     forces: Vec<Box<dyn Force>>,
+    base_pairs: Vec<(u32, u32)>,
+    base_matrix: BlockMatrix,
+    triangles: Vec<[u32; 3]>,
+    edges: Vec<[u32; 2]>,
     matrix: BlockMatrix,
     filter: Vec<Mat3>,
     pcg: PcgScratch,
@@ -166,11 +182,15 @@ impl Simulation {
         }
         let n = model.particle_count();
         let matrix = BlockMatrix::from_pairs(n, &pairs);
+        if let Some(c) = &model.collision {
+            c.validate()?;
+        }
         let filter = model
             .pinned
             .iter()
             .map(|&p| if p { Mat3::ZERO } else { Mat3::IDENTITY })
             .collect();
+        let (triangles, edges) = (model.triangles(), model.edges());
         Ok(Simulation {
             warm_start: vec![Vec3::ZERO; n],
             model,
@@ -178,6 +198,10 @@ impl Simulation {
             time: 0.0,
             steps: 0,
             forces,
+            base_matrix: matrix.clone(),
+            base_pairs: pairs,
+            triangles,
+            edges,
             matrix,
             filter,
             pcg: PcgScratch::default(),
@@ -215,19 +239,43 @@ impl Simulation {
     }
 
     /// Assembles `A = M - b D - a K` at `(x, v)` (with `a = h²`, `b = h`) into the matrix.
-    fn assemble(&mut self, x: &[Vec3], v: &[Vec3], h: f64) {
+    fn assemble(&mut self, x: &[Vec3], v: &[Vec3], h: f64, contact: Option<&Repulsions>) {
         self.matrix.clear();
         for (i, m) in self.model.mass.iter().enumerate() {
             let k = self.matrix.diag_index(i);
             self.matrix.values[k] = Mat3::from_diagonal(Vec3::splat(*m));
         }
-        for f in &self.forces {
+        for f in all_forces(&self.forces, contact) {
             f.add_jacobian(x, v, -h * h, -h, &mut self.matrix);
         }
     }
 
+    /// Cloth triangle pairs that intersect and particles inside analytic obstacles, at the
+    /// current state (what `drapery check` counts). A starting state with intersections is
+    /// reported, not repaired.
+    pub fn intersections(&self) -> (usize, usize) {
+        let selfi =
+            crate::collision::check::count_self_intersections(&self.model.x, &self.triangles);
+        let colliders: Vec<_> = self
+            .model
+            .obstacles
+            .iter()
+            .map(|o| o.collider.clone())
+            .collect();
+        let pen =
+            crate::collision::check::count_penetrations(&self.model.x, &colliders, self.time, 0.0);
+        (selfi, pen)
+    }
+
     /// `Φ(v)` of the module docs, for the line search.
-    fn objective(&self, x0: &[Vec3], v0: &[Vec3], v: &[Vec3], h: f64) -> f64 {
+    fn objective(
+        &self,
+        x0: &[Vec3],
+        v0: &[Vec3],
+        v: &[Vec3],
+        h: f64,
+        contact: Option<&Repulsions>,
+    ) -> f64 {
         let x: Vec<Vec3> = x0.iter().zip(v).map(|(a, b)| *a + h * *b).collect();
         let inertia: f64 = self
             .model
@@ -237,9 +285,7 @@ impl Simulation {
             .map(|(m, (a, b))| 0.5 * m * (*a - *b).length_squared())
             .sum();
         inertia
-            + self
-                .forces
-                .iter()
+            + all_forces(&self.forces, contact)
                 .map(|f| f.energy(&x) + h * f.dissipation(&x, v))
                 .sum::<f64>()
     }
@@ -286,6 +332,54 @@ impl Simulation {
             max_iterations: self.settings.max_iterations,
             preconditioner: self.settings.preconditioner,
         };
+
+        // Contacts found at the start of the step.
+        let tc = Instant::now();
+        let collision = self.model.collision;
+        let mut contacts: Vec<ObstacleContact> = match &collision {
+            Some(c) => response::obstacle_contacts(
+                &x0,
+                &v0,
+                &self.model.pinned,
+                &self.model.obstacles,
+                self.time,
+                h,
+                c.thickness,
+            ),
+            None => Vec::new(),
+        };
+        let repulsions = match &collision {
+            Some(c) if c.self_collision => {
+                let cand = candidates(&x0, &x0, &self.triangles, &self.edges, c.thickness);
+                let mut stencils =
+                    proximities(&x0, &self.triangles, &self.edges, &cand, c.thickness);
+                stencils.retain(|s| s.particles.iter().any(|&p| !self.model.pinned[p as usize]));
+                (!stencils.is_empty()).then(|| Repulsions {
+                    stencils,
+                    penalty: Penalty {
+                        thickness: c.thickness,
+                        stiffness: c.stiffness,
+                        tangential: false,
+                    },
+                })
+            }
+            _ => None,
+        };
+        report.self_contacts = repulsions.as_ref().map_or(0, |r| r.stencils.len());
+        match &repulsions {
+            Some(r) => {
+                let mut pairs = self.base_pairs.clone();
+                r.add_pattern(&mut pairs);
+                self.matrix = BlockMatrix::from_pairs(n, &pairs);
+            }
+            None if self.matrix.nnz_blocks() != self.base_matrix.nnz_blocks() => {
+                self.matrix = self.base_matrix.clone()
+            }
+            None => {}
+        }
+        let contact_force = repulsions.as_ref();
+        report.collision_seconds += tc.elapsed().as_secs_f64();
+
         // Iterate on v; x = x0 + h v except at the first linearization point (x0, v0).
         let mut v = v0.clone();
         let mut x = x0.clone();
@@ -294,71 +388,80 @@ impl Simulation {
         let mut w = vec![Vec3::ZERO; n];
         let mut z = vec![Vec3::ZERO; n];
         let mut dv = vec![Vec3::ZERO; n];
+        let mut impulse = vec![0.0; contacts.len()];
         let newton = self.settings.newton_iterations;
         for it in 0..newton {
             let t0 = Instant::now();
             f.iter_mut().for_each(|e| *e = Vec3::ZERO);
-            for force in &self.forces {
+            for force in all_forces(&self.forces, contact_force) {
                 force.add_force(&x, &v, &mut f);
             }
-            self.assemble(&x, &v, h);
+            self.assemble(&x, &v, h, contact_force);
             // rhs = M (v0 - v) + h f + h K (x0 + h v - x)
             for i in 0..n {
                 w[i] = x0[i] + h * v[i] - x[i];
                 rhs[i] = self.model.mass[i] * (v0[i] - v[i]) + h * f[i];
             }
             let mut kw = vec![Vec3::ZERO; n];
-            for force in &self.forces {
+            for force in all_forces(&self.forces, contact_force) {
                 force.add_jacobian_product(&x, &v, h, 0.0, &w, &mut kw);
             }
             for i in 0..n {
                 rhs[i] += kw[i];
-                z[i] = if self.model.pinned[i] {
-                    -v[i]
-                } else {
-                    Vec3::ZERO
-                };
-                dv[i] = Vec3::ZERO;
             }
             report.assembly_seconds += t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
-            match self.settings.linear_solver {
-                LinearSolver::Pcg => {
-                    let stats = pcg::solve(
-                        &self.matrix,
-                        &rhs,
-                        &self.filter,
-                        &z,
-                        &mut dv,
-                        &pcg_settings,
-                        &mut self.pcg,
-                    );
-                    report.cg_iterations += stats.iterations;
-                    report.residual = stats.relative_residual;
-                    if !stats.converged {
-                        self.restore(x0, v0);
-                        let why = if stats.indefinite {
-                            "the system matrix is not positive definite"
-                        } else {
-                            "conjugate gradient did not converge"
-                        };
-                        return Err(self.fail(format!(
-                            "{why} (Newton iteration {}, {} CG iterations, relative residual {:.3e}, tolerance {:.1e}); try a smaller dt, a larger solver.max_iterations or linear_solver = \"direct\"",
-                            it + 1,
-                            stats.iterations,
-                            stats.relative_residual,
-                            self.settings.tolerance
-                        )));
-                    }
+            // Solve; drop obstacle contacts that would pull (adhesive impulse) and solve again.
+            for round in 0..4 {
+                for i in 0..n {
+                    z[i] = if self.model.pinned[i] {
+                        -v[i]
+                    } else {
+                        Vec3::ZERO
+                    };
+                    self.filter[i] = if self.model.pinned[i] {
+                        Mat3::ZERO
+                    } else {
+                        Mat3::IDENTITY
+                    };
+                    dv[i] = if it == 0 && round == 0 {
+                        self.warm_start.get(i).copied().unwrap_or(Vec3::ZERO)
+                    } else {
+                        Vec3::ZERO
+                    };
                 }
-                LinearSolver::Direct => {
-                    if let Err(e) =
-                        self.direct
-                            .solve(&self.matrix, &rhs, &self.filter, &z, &mut dv, symmetric)
-                    {
-                        self.restore(x0, v0);
-                        return Err(self.fail(e));
-                    }
+                for c in &contacts {
+                    let i = c.particle as usize;
+                    self.filter[i] = Mat3::IDENTITY - outer(c.normal, c.normal);
+                    z[i] = c.normal * (c.normal_velocity - c.normal.dot(v[i]));
+                }
+                if let Err(e) =
+                    self.solve(&rhs, &z, &mut dv, &pcg_settings, symmetric, it, &mut report)
+                {
+                    self.restore(x0, v0);
+                    return Err(e);
+                }
+                if contacts.is_empty() {
+                    break;
+                }
+                let mut r = vec![Vec3::ZERO; n];
+                self.matrix.mul_vec(&dv, &mut r);
+                impulse = contacts
+                    .iter()
+                    .map(|c| {
+                        c.normal
+                            .dot(r[c.particle as usize] - rhs[c.particle as usize])
+                    })
+                    .collect();
+                let scale = impulse.iter().fold(0.0f64, |m, l| m.max(l.abs()));
+                let before = contacts.len();
+                let keep: Vec<bool> = impulse.iter().map(|&l| l >= -1e-9 * scale).collect();
+                let mut k = keep.iter();
+                contacts.retain(|_| *k.next().unwrap_or(&true));
+                let mut k = keep.iter();
+                impulse.retain(|_| *k.next().unwrap_or(&true));
+                if contacts.len() == before || round == 3 {
+                    break;
                 }
             }
             report.solve_seconds += t1.elapsed().as_secs_f64();
@@ -371,11 +474,13 @@ impl Simulation {
                 } else {
                     v.clone()
                 };
-                let phi0 = self.objective(&x0, &v0, &start, h);
+                let phi0 = self.objective(&x0, &v0, &start, h, contact_force);
                 let full: Vec<Vec3> = v.iter().zip(&dv).map(|(a, b)| *a + *b).collect();
                 let mut cand = full.clone();
                 for _ in 0..20 {
-                    if self.objective(&x0, &v0, &cand, h) <= phi0 || !phi0.is_finite() {
+                    if self.objective(&x0, &v0, &cand, h, contact_force) <= phi0
+                        || !phi0.is_finite()
+                    {
                         break;
                     }
                     alpha *= 0.5;
@@ -406,10 +511,54 @@ impl Simulation {
                 break;
             }
         }
+        report.obstacle_contacts = contacts.len();
+
+        // Friction, then the fail-safe: nothing crosses anything over the step.
+        if let Some(c) = &collision {
+            let tc = Instant::now();
+            response::apply_friction(&mut v, &self.model.mass, &contacts, &impulse);
+            for i in 0..n {
+                x[i] = x0[i] + h * v[i];
+            }
+            let before = x.clone();
+            match response::failsafe(
+                &x0,
+                &mut x,
+                &self.model.pinned,
+                &self.triangles,
+                &self.edges,
+                &self.model.obstacles,
+                self.time,
+                h,
+                c.thickness,
+                c.self_collision,
+            ) {
+                Ok(r) => report.ccd_hits = r.ccd_hits,
+                Err(e) => {
+                    self.restore(x0, v0);
+                    return Err(self.fail(e));
+                }
+            }
+            for i in 0..n {
+                if x[i] != before[i] {
+                    v[i] = (x[i] - x0[i]) / h;
+                }
+            }
+            report.collision_seconds += tc.elapsed().as_secs_f64();
+        }
+
         self.model.x = x;
         self.model.v = v;
         let ke1 = self.model.kinetic_energy();
-        let allowance = 0.5 * self.model.total_mass() * (self.model.gravity.length() * h).powi(2);
+        let surface_speed = self
+            .model
+            .obstacles
+            .iter()
+            .map(|o| o.collider.motion.velocity.length())
+            .fold(0.0, f64::max);
+        let allowance = 0.5
+            * self.model.total_mass()
+            * ((self.model.gravity.length() * h).powi(2) + surface_speed.powi(2));
         if ke1 > BLOWUP_RATIO * (ke0 + allowance) + 1e-300 {
             let p = (0..n)
                 .max_by(|&a, &b| {
@@ -433,8 +582,71 @@ impl Simulation {
         Ok(report)
     }
 
+    /// One linear solve with the current filter into `dv`.
+    #[allow(clippy::too_many_arguments)]
+    fn solve(
+        &mut self,
+        rhs: &[Vec3],
+        z: &[Vec3],
+        dv: &mut [Vec3],
+        pcg_settings: &PcgSettings,
+        symmetric: bool,
+        it: u32,
+        report: &mut StepReport,
+    ) -> Result<()> {
+        match self.settings.linear_solver {
+            LinearSolver::Pcg => {
+                let stats = pcg::solve(
+                    &self.matrix,
+                    rhs,
+                    &self.filter,
+                    z,
+                    dv,
+                    pcg_settings,
+                    &mut self.pcg,
+                );
+                report.cg_iterations += stats.iterations;
+                report.residual = stats.relative_residual;
+                if !stats.converged {
+                    let why = if stats.indefinite {
+                        "the system matrix is not positive definite"
+                    } else {
+                        "conjugate gradient did not converge"
+                    };
+                    return Err(self.fail(format!(
+                        "{why} (Newton iteration {}, {} CG iterations, relative residual {:.3e}, tolerance {:.1e}); try a smaller dt, a larger solver.max_iterations or linear_solver = \"direct\"",
+                        it + 1,
+                        stats.iterations,
+                        stats.relative_residual,
+                        self.settings.tolerance
+                    )));
+                }
+            }
+            LinearSolver::Direct => {
+                if let Err(e) = self
+                    .direct
+                    .solve(&self.matrix, rhs, &self.filter, z, dv, symmetric)
+                {
+                    return Err(self.fail(e));
+                }
+            }
+        }
+        Ok(())
+    }
+
     fn restore(&mut self, x0: Vec<Vec3>, v0: Vec<Vec3>) {
         self.model.x = x0;
         self.model.v = v0;
     }
+}
+
+/// The model's forces plus this step's contact force, if any.
+fn all_forces<'a>(
+    forces: &'a [Box<dyn Force>],
+    contact: Option<&'a Repulsions>,
+) -> impl Iterator<Item = &'a dyn Force> {
+    forces
+        .iter()
+        .map(|f| f.as_ref())
+        .chain(contact.map(|c| c as &dyn Force))
 }

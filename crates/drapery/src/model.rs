@@ -158,6 +158,10 @@ pub struct Model {
     pub gravity: Vec3,
     /// The cloths, in order.
     pub cloths: Vec<ClothInfo>,
+    /// Collision handling; `None` turns collisions off (default: `None`).
+    pub collision: Option<crate::collision::settings::CollisionSettings>,
+    /// Obstacles (used when `collision` is set).
+    pub obstacles: Vec<crate::collision::settings::Obstacle>,
 }
 
 fn check_nonneg(cloth: &str, field: &str, v: f64) -> Result<()> {
@@ -185,6 +189,8 @@ impl Model {
             springs: Springs::default(),
             gravity,
             cloths: Vec::new(),
+            collision: None,
+            obstacles: Vec::new(),
         };
         for c in cloths {
             m.add_cloth(c)?;
@@ -307,6 +313,32 @@ impl Model {
             mesh: c.mesh,
         });
         Ok(())
+    }
+
+    /// Every cloth triangle (quads split), in global particle indices.
+    pub fn triangles(&self) -> Vec<[u32; 3]> {
+        self.cloths
+            .iter()
+            .flat_map(|c| {
+                c.mesh
+                    .triangles()
+                    .into_iter()
+                    .map(move |t| t.map(|i| i + c.offset as u32))
+            })
+            .collect()
+    }
+
+    /// Every cloth edge (polygon sides and line elements), in global particle indices.
+    pub fn edges(&self) -> Vec<[u32; 2]> {
+        self.cloths
+            .iter()
+            .flat_map(|c| {
+                c.mesh
+                    .edges()
+                    .into_iter()
+                    .map(move |e| e.map(|i| i + c.offset as u32))
+            })
+            .collect()
     }
 
     /// Number of particles.

@@ -300,6 +300,12 @@ impl Collider {
         c + rot * (x - self.center())
     }
 
+    /// Where the point at `x` at time `t_from`, moving rigidly with the collider, is at `t_to`.
+    pub fn carry(&self, x: Vec3, t_from: f64, t_to: f64) -> Vec3 {
+        let (rot, c) = self.pose(t_from);
+        self.transform_point(self.center() + rot.inverse() * (x - c), t_to)
+    }
+
     /// Closest point on the surface at time `t` to `p`. See the module docs.
     pub fn closest(&self, p: Vec3, t: f64) -> Contact {
         let (rot, c_t) = self.pose(t);

@@ -22,3 +22,5 @@ pub mod distance;
 pub mod predicates;
 pub mod proximity;
 pub mod repulsion;
+pub mod response;
+pub mod settings;

@@ -7,11 +7,13 @@
 pub mod damping;
 pub mod drag;
 pub mod gravity;
+pub mod repulsion;
 pub mod spring;
 
 pub use damping::SpringDamping;
 pub use drag::AirDrag;
 pub use gravity::Gravity;
+pub use repulsion::Repulsions;
 pub use spring::Springs;
 
 use crate::linalg::BlockMatrix;

@@ -1,0 +1,349 @@
+//! Collision response around the implicit solve.
+//!
+//! Before the solve:
+//! * [`obstacle_contacts`]: particles within the thickness of an obstacle (and not moving away
+//!   from it) become velocity constraints of the filtered solve (MATH.md §5): their normal
+//!   velocity relative to the obstacle is prescribed so that they end the step at the thickness.
+//! * cloth–cloth close pairs become repulsion stencils ([`crate::forces::Repulsions`]), whose
+//!   Jacobians enter the same matrix.
+//!
+//! After the solve, [`failsafe`] guarantees that nothing passed through anything over the step:
+//! * each particle's straight path is swept against the analytic obstacles (conservative
+//!   advancement on their signed distance, which is 1-Lipschitz); a particle that would come
+//!   within a tenth of the thickness stops there and moves rigidly with the obstacle for the rest
+//!   of the step;
+//! * vertex–triangle and edge–edge continuous collision detection runs over the cloth (self and
+//!   cloth–cloth) and against mesh obstacles; the cloth vertices of a colliding pair are pulled
+//!   back along their own paths to half the time of impact, repeatedly, and after a few rounds all
+//!   the way to their start (always collision-free), or carried rigidly with the obstacle that
+//!   hits them. This is a CCD-limited step, applied only to the vertices that need it.
+
+use super::broad_phase::candidates;
+use super::ccd::{edge_edge_toi, vertex_triangle_toi};
+use super::colliders::Shape;
+use super::settings::Obstacle;
+use crate::math::Vec3;
+use rayon::prelude::*;
+
+/// A particle held against an obstacle during the solve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ObstacleContact {
+    /// Particle index.
+    pub particle: u32,
+    /// Unit normal pointing from the obstacle to the particle.
+    pub normal: Vec3,
+    /// Normal velocity the particle must have at the end of the step, m/s.
+    pub normal_velocity: f64,
+    /// Velocity of the obstacle surface at the contact.
+    pub surface_velocity: Vec3,
+    /// Coulomb coefficient.
+    pub friction: f64,
+}
+
+/// The closest contact of `p` with `o` at time `t`: (distance on the particle's side, unit
+/// normal toward the particle, surface velocity).
+fn contact(o: &Obstacle, p: Vec3, t: f64) -> (f64, Vec3, Vec3) {
+    let c = o.collider.closest(p, t);
+    match o.collider.shape {
+        Shape::Mesh(_) => {
+            let d = p - c.point;
+            let l = d.length();
+            let n = if l > 1e-12 { d / l } else { c.normal * c.side };
+            (l, n, c.velocity_at_point)
+        }
+        _ => (c.signed_distance, c.normal, c.velocity_at_point),
+    }
+}
+
+/// Contacts at the start of a step: free particles within `thickness` of an obstacle whose
+/// normal velocity relative to it is below what would carry them back to the thickness in
+/// one step. The deepest obstacle wins when there are several.
+pub fn obstacle_contacts(
+    x: &[Vec3],
+    v: &[Vec3],
+    pinned: &[bool],
+    obstacles: &[Obstacle],
+    t: f64,
+    h: f64,
+    thickness: f64,
+) -> Vec<ObstacleContact> {
+    if obstacles.is_empty() {
+        return Vec::new();
+    }
+    let per: Vec<Option<ObstacleContact>> = (0..x.len())
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|i| {
+            if pinned[i] {
+                return None;
+            }
+            let mut best: Option<(f64, ObstacleContact)> = None;
+            for o in obstacles {
+                let (d, n, vs) = contact(o, x[i], t);
+                if d < thickness && best.as_ref().is_none_or(|(bd, _)| d < *bd) {
+                    let target = n.dot(vs) + (thickness - d) / h;
+                    if n.dot(v[i]) <= target {
+                        best = Some((
+                            d,
+                            ObstacleContact {
+                                particle: i as u32,
+                                normal: n,
+                                normal_velocity: target,
+                                surface_velocity: vs,
+                                friction: o.friction,
+                            },
+                        ));
+                    }
+                }
+            }
+            best.map(|(_, c)| c)
+        })
+        .collect();
+    per.into_iter().flatten().collect()
+}
+
+/// Applies Coulomb friction to constrained particles after the solve: the tangential velocity
+/// relative to the surface loses up to `μ λ / m`, where `λ` is the normal impulse the
+/// constraint exerted (static friction when it would reverse).
+pub fn apply_friction(v: &mut [Vec3], mass: &[f64], contacts: &[ObstacleContact], impulse: &[f64]) {
+    for (c, &lambda) in contacts.iter().zip(impulse) {
+        if !(lambda > 0.0) || c.friction == 0.0 {
+            continue;
+        }
+        let i = c.particle as usize;
+        let rel = v[i] - c.surface_velocity;
+        let vn = c.normal * c.normal.dot(rel);
+        let vt = rel - vn;
+        let speed = vt.length();
+        let limit = c.friction * lambda / mass[i];
+        let vt = if speed <= limit {
+            Vec3::ZERO
+        } else {
+            vt * (1.0 - limit / speed)
+        };
+        v[i] = c.surface_velocity + vn + vt;
+    }
+}
+
+/// What the fail-safe did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FailsafeReport {
+    /// Particles stopped by an analytic obstacle.
+    pub obstacle_stops: usize,
+    /// Colliding vertex–triangle or edge–edge pairs found by CCD (over all rounds).
+    pub ccd_hits: usize,
+    /// CCD rounds run.
+    pub rounds: usize,
+}
+
+/// Rounds of pull-back before vertices go all the way back to their start.
+const PARTIAL_ROUNDS: usize = 4;
+/// Rounds after which the step is declared unresolvable.
+const MAX_ROUNDS: usize = 40;
+
+/// Sweeps `x0 → x1` against an analytic obstacle over `[t0, t0 + h]`; returns the fraction of
+/// the path at which the particle comes within `stop` of the surface.
+fn sweep(o: &Obstacle, x0: Vec3, x1: Vec3, t0: f64, h: f64, stop: f64) -> Option<f64> {
+    let col = &o.collider;
+    let len = (x1 - x0).length();
+    let c = col.center();
+    let reach = (x0 - c).length().max((x1 - c).length()) + len + col.motion.velocity.length() * h;
+    // bound on d(distance)/ds along the path (surface point speeds × h plus the path length)
+    let rate =
+        len + h * (col.motion.velocity.length() + col.motion.angular_velocity.length() * reach);
+    let mut s = 0.0;
+    for _ in 0..1000 {
+        let d = col.closest(x0 + s * (x1 - x0), t0 + s * h).signed_distance;
+        if d < stop {
+            return Some(s);
+        }
+        if s >= 1.0 || rate == 0.0 {
+            return None;
+        }
+        s = (s + ((d - 0.5 * stop) / rate).max(1e-6)).min(1.0);
+    }
+    Some(s)
+}
+
+/// Makes the end-of-step positions `x1` free of crossings (see the module docs). Returns the
+/// report, or a message when collisions could not be resolved.
+#[allow(clippy::too_many_arguments)]
+pub fn failsafe(
+    x0: &[Vec3],
+    x1: &mut [Vec3],
+    pinned: &[bool],
+    triangles: &[[u32; 3]],
+    edges: &[[u32; 2]],
+    obstacles: &[Obstacle],
+    t0: f64,
+    h: f64,
+    thickness: f64,
+    self_collision: bool,
+) -> Result<FailsafeReport, String> {
+    let n = x0.len();
+    let mut report = FailsafeReport::default();
+    let stop = 0.1 * thickness;
+    // 1. analytic obstacles
+    let analytic: Vec<&Obstacle> = obstacles
+        .iter()
+        .filter(|o| !matches!(o.collider.shape, Shape::Mesh(_)))
+        .collect();
+    if !analytic.is_empty() {
+        let moved: Vec<Option<Vec3>> = (0..n)
+            .into_par_iter()
+            .with_min_len(128)
+            .map(|i| {
+                if pinned[i] {
+                    return None;
+                }
+                let mut end = x1[i];
+                let mut changed = false;
+                for o in &analytic {
+                    if o.collider.closest(x0[i], t0).signed_distance < stop {
+                        // started (too) close: only make sure it ends outside
+                        let c = o.collider.closest(end, t0 + h);
+                        if c.signed_distance < stop {
+                            end = c.point + c.normal * stop;
+                            changed = true;
+                        }
+                    } else if let Some(s) = sweep(o, x0[i], end, t0, h, stop) {
+                        let hit = x0[i] + s * (end - x0[i]);
+                        end = o.collider.carry(hit, t0 + s * h, t0 + h);
+                        changed = true;
+                    }
+                }
+                changed.then_some(end)
+            })
+            .collect();
+        for (i, m) in moved.into_iter().enumerate() {
+            if let Some(p) = m {
+                x1[i] = p;
+                report.obstacle_stops += 1;
+            }
+        }
+    }
+    // 2. CCD over cloth and mesh obstacles
+    let meshes: Vec<(usize, &Obstacle)> = obstacles
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| matches!(o.collider.shape, Shape::Mesh(_)))
+        .collect();
+    if !self_collision && meshes.is_empty() {
+        return Ok(report);
+    }
+    let mut ys0: Vec<Vec3> = x0.to_vec();
+    let mut ys1: Vec<Vec3> = Vec::new();
+    let mut tris: Vec<[u32; 3]> = triangles.to_vec();
+    let mut all_edges: Vec<[u32; 2]> = edges.to_vec();
+    let mut owner: Vec<usize> = Vec::new(); // obstacle index of each obstacle vertex
+    for &(k, o) in &meshes {
+        let Shape::Mesh(m) = &o.collider.shape else {
+            continue;
+        };
+        let base = ys0.len() as u32;
+        for &p in m.vertices() {
+            ys0.push(o.collider.transform_point(p, t0));
+            ys1.push(o.collider.transform_point(p, t0 + h));
+            owner.push(k);
+        }
+        let mut seen = std::collections::HashSet::new();
+        for t in m.triangles() {
+            tris.push(t.map(|i| i + base));
+            for e in [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]] {
+                let key = (e[0].min(e[1]), e[0].max(e[1]));
+                if seen.insert(key) {
+                    all_edges.push([key.0 + base, key.1 + base]);
+                }
+            }
+        }
+    }
+    let ob_end = ys1;
+    let start = x1.to_vec();
+    let mut frac = vec![1.0f64; n];
+    let mut carried: Vec<Option<usize>> = vec![None; n];
+    let tol = 1e-3 * thickness;
+    let is_cloth = |i: u32| (i as usize) < n;
+    for round in 0..MAX_ROUNDS {
+        let mut ye: Vec<Vec3> = (0..n)
+            .map(|i| match carried[i] {
+                Some(k) => obstacles[k].collider.carry(x0[i], t0, t0 + h),
+                None => x0[i] + frac[i] * (start[i] - x0[i]),
+            })
+            .collect();
+        ye.extend_from_slice(&ob_end);
+        let cand = candidates(&ys0, &ye, &tris, &all_edges, tol);
+        let keep = |ids: &[u32]| {
+            let cloth = ids.iter().filter(|&&i| is_cloth(i)).count();
+            cloth > 0 && (cloth < ids.len() || self_collision)
+        };
+        let mut hits: Vec<([u32; 4], f64)> = cand
+            .vt
+            .par_iter()
+            .filter_map(|&(v, t)| {
+                let tr = tris[t as usize];
+                let ids = [v, tr[0], tr[1], tr[2]];
+                if !keep(&ids) {
+                    return None;
+                }
+                let a = ids.map(|i| ys0[i as usize]);
+                let b = ids.map(|i| ye[i as usize]);
+                vertex_triangle_toi(&a, &b, tol)
+                    .filter(|&s| s > 0.0)
+                    .map(|s| (ids, s))
+            })
+            .collect();
+        hits.extend(
+            cand.ee
+                .par_iter()
+                .filter_map(|&(e, f)| {
+                    let (p, q) = (all_edges[e as usize], all_edges[f as usize]);
+                    let ids = [p[0], p[1], q[0], q[1]];
+                    if !keep(&ids) {
+                        return None;
+                    }
+                    let a = ids.map(|i| ys0[i as usize]);
+                    let b = ids.map(|i| ye[i as usize]);
+                    edge_edge_toi(&a, &b, tol)
+                        .filter(|&s| s > 0.0)
+                        .map(|s| (ids, s))
+                })
+                .collect::<Vec<_>>(),
+        );
+        report.rounds = round + 1;
+        if hits.is_empty() {
+            for i in 0..n {
+                x1[i] = ye[i];
+            }
+            return Ok(report);
+        }
+        report.ccd_hits += hits.len();
+        for (ids, s) in &hits {
+            let obstacle = ids
+                .iter()
+                .find(|&&i| !is_cloth(i))
+                .map(|&i| owner[i as usize - n]);
+            let all_back = ids
+                .iter()
+                .filter(|&&i| is_cloth(i))
+                .all(|&i| frac[i as usize] == 0.0 || pinned[i as usize]);
+            for &i in ids.iter().filter(|&&i| is_cloth(i)) {
+                let i = i as usize;
+                if pinned[i] {
+                    continue;
+                }
+                if all_back {
+                    if let Some(k) = obstacle {
+                        carried[i] = Some(k);
+                    }
+                } else if round < PARTIAL_ROUNDS {
+                    frac[i] = frac[i].min(frac[i] * 0.5 * s);
+                } else {
+                    frac[i] = 0.0;
+                }
+            }
+        }
+    }
+    Err(format!(
+        "collisions could not be resolved after {MAX_ROUNDS} rounds of continuous collision detection"
+    ))
+}

@@ -1,0 +1,63 @@
+//! What the scene says about collisions: thickness, self-collision, friction, contact stiffness,
+//! and the obstacles.
+
+use super::colliders::Collider;
+use crate::error::{Error, Result};
+
+/// Collision parameters shared by every contact.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CollisionSettings {
+    /// Distance cloth keeps from obstacles and from itself, m (default: 0.005).
+    pub thickness: f64,
+    /// Cloth against itself and against other cloths (default: true).
+    pub self_collision: bool,
+    /// Coulomb friction coefficient, static and kinetic, for obstacles (default: 0.3).
+    pub friction: f64,
+    /// Stiffness of the cloth–cloth repulsion, N/m (default: 1000).
+    pub stiffness: f64,
+}
+
+impl Default for CollisionSettings {
+    fn default() -> Self {
+        CollisionSettings {
+            thickness: 0.005,
+            self_collision: true,
+            friction: 0.3,
+            stiffness: 1000.0,
+        }
+    }
+}
+
+impl CollisionSettings {
+    /// Checks the ranges.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.thickness > 0.0 && self.thickness.is_finite()) {
+            return Err(Error::Invalid(format!(
+                "collision.thickness must be a finite number > 0, got {}",
+                self.thickness
+            )));
+        }
+        if !(self.friction >= 0.0 && self.friction.is_finite()) {
+            return Err(Error::Invalid(format!(
+                "collision.friction must be a finite number ≥ 0, got {}",
+                self.friction
+            )));
+        }
+        if !(self.stiffness > 0.0 && self.stiffness.is_finite()) {
+            return Err(Error::Invalid(format!(
+                "collision.stiffness must be a finite number > 0, got {}",
+                self.stiffness
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// An obstacle and its friction coefficient.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Obstacle {
+    /// Shape and rigid motion.
+    pub collider: Collider,
+    /// Coulomb coefficient for contacts with this obstacle.
+    pub friction: f64,
+}
