@@ -6,10 +6,14 @@
 //! [`FrameWriter::frame`]; a whole-run format keeps what it needs in memory and writes in
 //! [`FrameWriter::finish`]. Adding a format is one `Format` variant and one writer.
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, anyhow};
 use clap::{Args, ValueEnum};
 use drapery::Model;
+use drapery::Vec3;
+use drapery::io::gltf::write_glb;
 use drapery::io::obj::write_obj;
+use drapery::io::ply::write_ply;
+use drapery::io::usd::write_usda;
 use drapery::scene::Scene;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -24,8 +28,9 @@ pub struct RunArgs {
     /// Folder for the output frames (created if missing; existing frame files are overwritten).
     #[arg(short, long, value_name = "DIR")]
     pub output: PathBuf,
-    /// Output formats, comma separated. `obj` writes DIR/frame_00000.obj, frame_00001.obj, …
-    /// (`glb`, `usd` and `ply` are reserved for a later release.)
+    /// Output formats, comma separated: `obj` and `ply` write one file per frame
+    /// (DIR/frame_00000.obj, …), `glb` and `usd` one animation per run (DIR/<scene stem>.glb,
+    /// DIR/<scene stem>.usda, written at the end, also after a blow-up).
     #[arg(
         short,
         long,
@@ -48,15 +53,22 @@ pub struct RunArgs {
 pub enum Format {
     /// Wavefront OBJ, one file per frame.
     Obj,
-    /// glTF binary with morph targets, one file per run (not available yet).
+    /// glTF binary with morph targets, one file per run: DIR/<scene stem>.glb.
     Glb,
-    /// USD ASCII point cache, one file per run (not available yet).
+    /// USD ASCII point cache, one file per run: DIR/<scene stem>.usda.
     Usd,
-    /// Binary PLY, one file per frame (not available yet).
+    /// Binary little-endian PLY (f64 positions), one file per frame: DIR/frame_00000.ply, ….
     Ply,
 }
 
 impl Format {
+    fn extension(self) -> &'static str {
+        match self {
+            Format::Usd => "usda",
+            other => other.name(),
+        }
+    }
+
     fn name(self) -> &'static str {
         match self {
             Format::Obj => "obj",
@@ -69,10 +81,18 @@ impl Format {
 
 /// A sink for frames.
 pub trait FrameWriter {
-    /// Frame `k` (0-based; frame 0 is the initial state) at simulated time `time`.
-    fn frame(&mut self, k: usize, time: f64, model: &Model) -> drapery::Result<()>;
-    /// Called once after the last frame (not after a failed step).
-    fn finish(&mut self) -> drapery::Result<()> {
+    /// Frame `k` (0-based; frame 0 is the initial state).
+    fn frame(&mut self, _k: usize, _model: &Model) -> drapery::Result<()> {
+        Ok(())
+    }
+    /// True for whole-run formats: the run then keeps every frame's positions in memory and
+    /// hands them to [`FrameWriter::finish`].
+    fn whole_run(&self) -> bool {
+        false
+    }
+    /// Called once at the end with the positions of frames `0..frames.len()` (empty unless some
+    /// writer is [`FrameWriter::whole_run`]); also after a failed step, with the frames done.
+    fn finish(&mut self, _model: &Model, _frames: &[Vec<Vec3>]) -> drapery::Result<()> {
         Ok(())
     }
 }
@@ -83,8 +103,38 @@ struct ObjFrames {
 }
 
 impl FrameWriter for ObjFrames {
-    fn frame(&mut self, k: usize, _time: f64, model: &Model) -> drapery::Result<()> {
+    fn frame(&mut self, k: usize, model: &Model) -> drapery::Result<()> {
         write_obj(&frame_path(&self.dir, k, "obj"), &model.cloths, &model.x)
+    }
+}
+
+/// `DIR/frame_NNNNN.ply`, one binary PLY per frame, each written atomically.
+struct PlyFrames {
+    dir: PathBuf,
+}
+
+impl FrameWriter for PlyFrames {
+    fn frame(&mut self, k: usize, model: &Model) -> drapery::Result<()> {
+        write_ply(&frame_path(&self.dir, k, "ply"), &model.cloths, &model.x)
+    }
+}
+
+/// `DIR/<stem>.glb` or `DIR/<stem>.usda`, written once at the end from every frame.
+struct WholeRun {
+    format: Format,
+    path: PathBuf,
+    frame_rate: f64,
+}
+
+impl FrameWriter for WholeRun {
+    fn whole_run(&self) -> bool {
+        true
+    }
+    fn finish(&mut self, model: &Model, frames: &[Vec<Vec3>]) -> drapery::Result<()> {
+        match self.format {
+            Format::Glb => write_glb(&self.path, &model.cloths, frames, self.frame_rate),
+            _ => write_usda(&self.path, &model.cloths, frames, self.frame_rate),
+        }
     }
 }
 
@@ -93,13 +143,26 @@ pub fn frame_path(dir: &Path, k: usize, ext: &str) -> PathBuf {
     dir.join(format!("frame_{k:05}.{ext}"))
 }
 
-/// The writer of one format, or an error when the format is not available.
-fn writer_for(format: Format, dir: &Path) -> Result<Box<dyn FrameWriter>> {
+/// The file name stem of whole-run outputs: the scene file's stem (`hang` for `hang.toml`).
+fn run_stem(scene: &Path) -> String {
+    scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .filter(|s| !s.is_empty())
+        .unwrap_or_else(|| "drapery".into())
+}
+
+/// The writer of one format.
+fn writer_for(format: Format, dir: &Path, stem: &str, frame_rate: f64) -> Box<dyn FrameWriter> {
+    let dir = dir.to_path_buf();
     match format {
-        Format::Obj => Ok(Box::new(ObjFrames {
-            dir: dir.to_path_buf(),
-        })),
-        other => bail!("format '{}' is not available yet", other.name()),
+        Format::Obj => Box::new(ObjFrames { dir }),
+        Format::Ply => Box::new(PlyFrames { dir }),
+        Format::Glb | Format::Usd => Box::new(WholeRun {
+            format,
+            path: dir.join(format!("{stem}.{}", format.extension())),
+            frame_rate,
+        }),
     }
 }
 
@@ -110,10 +173,6 @@ pub fn run(args: RunArgs) -> Result<()> {
         if !formats.contains(&f) {
             formats.push(f);
         }
-    }
-    for &f in &formats {
-        // Reject unavailable formats before anything is loaded or written.
-        writer_for(f, &args.output)?;
     }
     // Before anything else may start rayon's default pool.
     if let Some(n) = args.threads {
@@ -127,10 +186,13 @@ pub fn run(args: RunArgs) -> Result<()> {
 
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("{}: cannot create the output folder", args.output.display()))?;
-    let mut writers = formats
+    let stem = run_stem(&args.scene);
+    let mut writers: Vec<Box<dyn FrameWriter>> = formats
         .iter()
-        .map(|&f| writer_for(f, &args.output))
-        .collect::<Result<Vec<_>>>()?;
+        .map(|&f| writer_for(f, &args.output, &stem, scene.frame_rate))
+        .collect();
+    let keep_history = writers.iter().any(|w| w.whole_run());
+    let mut history: Vec<Vec<Vec3>> = Vec::new();
 
     let frames = scene.frame_count();
     let steps_per_frame = scene.steps_per_frame();
@@ -151,32 +213,60 @@ pub fn run(args: RunArgs) -> Result<()> {
     let mut cg_total: u64 = 0;
     let mut cg_max: usize = 0;
     let mut steps: u64 = 0;
-    for w in writers.iter_mut() {
-        w.frame(0, 0.0, &sim.model)?;
-    }
-    for k in 1..=frames {
-        for _ in 0..steps_per_frame {
-            let report = sim.step(h).map_err(|e| {
-                progress.abandon();
-                anyhow!(
-                    "frame {k}: {e}; frames 0 to {} are in {}",
-                    k - 1,
-                    args.output.display()
-                )
-            })?;
-            steps += 1;
-            cg_total += report.cg_iterations as u64;
-            cg_max = cg_max.max(report.cg_iterations);
-        }
-        let time = k as f64 / scene.frame_rate;
+    let mut emit = |k: usize,
+                    sim: &drapery::Simulation,
+                    history: &mut Vec<Vec<Vec3>>|
+     -> drapery::Result<()> {
         for w in writers.iter_mut() {
-            w.frame(k, time, &sim.model)?;
+            w.frame(k, &sim.model)?;
         }
-        progress.set_message(format!("{time:.3} s"));
+        if keep_history {
+            history.push(sim.model.x.clone());
+        }
+        Ok(())
+    };
+    emit(0, &sim, &mut history)?;
+    let mut failure = None;
+    'frames: for k in 1..=frames {
+        for _ in 0..steps_per_frame {
+            match sim.step(h) {
+                Ok(report) => {
+                    steps += 1;
+                    cg_total += report.cg_iterations as u64;
+                    cg_max = cg_max.max(report.cg_iterations);
+                }
+                Err(e) => {
+                    failure = Some(anyhow!(
+                        "frame {k}: {e}; frames 0 to {} are in {}",
+                        k - 1,
+                        args.output.display()
+                    ));
+                    break 'frames;
+                }
+            }
+        }
+        emit(k, &sim, &mut history)?;
+        progress.set_message(format!("{:.3} s", k as f64 / scene.frame_rate));
         progress.inc(1);
     }
+    if failure.is_some() {
+        progress.abandon();
+    }
+    // Whole-run files are written even after a blow-up, with the frames done.
+    let mut finish_error = None;
     for w in writers.iter_mut() {
-        w.finish()?;
+        if let Err(e) = w.finish(&sim.model, &history) {
+            finish_error.get_or_insert(e);
+        }
+    }
+    if let Some(e) = failure {
+        return Err(match finish_error {
+            Some(f) => e.context(format!("also: {f}")),
+            None => e,
+        });
+    }
+    if let Some(e) = finish_error {
+        return Err(e.into());
     }
     progress.finish_and_clear();
     if !args.quiet {
