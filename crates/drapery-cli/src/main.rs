@@ -9,6 +9,7 @@ use std::process::ExitCode;
 
 mod render;
 mod run;
+mod state;
 mod validate;
 
 /// Implicit mass-spring cloth simulation (Baraff & Witkin 1998).

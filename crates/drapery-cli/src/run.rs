@@ -5,8 +5,12 @@
 //! `duration`. Output goes through [`FrameWriter`]s: a per-frame format writes a file in
 //! [`FrameWriter::frame`]; a whole-run format keeps what it needs in memory and writes in
 //! [`FrameWriter::finish`]. Adding a format is one `Format` variant and one writer.
+//!
+//! After each frame the run state is saved (see [`crate::state`]) so that `--resume` continues
+//! a killed run to the same bits; a folder holding another run is refused unless `--overwrite`.
 
-use anyhow::{Context, Result, anyhow};
+use crate::state::{HISTORY_FILE, History, RunState, STATE_FILE, fingerprint};
+use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, ValueEnum};
 use drapery::Model;
 use drapery::Vec3;
@@ -46,10 +50,23 @@ pub struct RunArgs {
     /// No progress bar and no summary line (errors are still printed).
     #[arg(short, long)]
     pub quiet: bool,
+    /// Continue the run in DIR from its last complete frame (DIR/state.bin); the result is
+    /// bit for bit that of an uninterrupted run. Needs the same scene, meshes and formats.
+    /// Starts from frame 0 when DIR holds no run yet.
+    #[arg(long, conflicts_with = "overwrite")]
+    pub resume: bool,
+    /// Replace what DIR holds: delete its frame_* files, state.bin, history.bin and the
+    /// scene's .glb/.usda first. Without --overwrite or --resume, a DIR that already holds
+    /// frames or a state file is refused.
+    #[arg(long)]
+    pub overwrite: bool,
+    /// Testing: stop with an error after frame N is written (as if killed).
+    #[arg(long, hide = true, value_name = "N")]
+    pub stop_after_frames: Option<usize>,
 }
 
 /// Output formats.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, ValueEnum)]
 pub enum Format {
     /// Wavefront OBJ, one file per frame.
     Obj,
@@ -166,14 +183,115 @@ fn writer_for(format: Format, dir: &Path, stem: &str, frame_rate: f64) -> Box<dy
     }
 }
 
-/// Runs a scene.
-pub fn run(args: RunArgs) -> Result<()> {
-    let mut formats: Vec<Format> = Vec::new();
-    for &f in &args.format {
-        if !formats.contains(&f) {
-            formats.push(f);
+/// True for `frame_<digits>.obj` / `.ply` and for the temporary files of atomic writes of those.
+fn is_frame_file(name: &str) -> bool {
+    let name = name.strip_prefix('.').unwrap_or(name);
+    let Some(rest) = name.strip_prefix("frame_") else {
+        return false;
+    };
+    let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
+    let ext = &rest[digits..];
+    digits > 0 && (ext.starts_with(".obj") || ext.starts_with(".ply"))
+}
+
+/// Whether DIR holds frames or a run state.
+fn holds_a_run(dir: &Path) -> Result<bool> {
+    let rd = match std::fs::read_dir(dir) {
+        Ok(rd) => rd,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(false),
+        Err(e) => {
+            return Err(e)
+                .with_context(|| format!("{}: cannot read the output folder", dir.display()));
+        }
+    };
+    for e in rd.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if is_frame_file(&name) || name == STATE_FILE || name == HISTORY_FILE {
+            return Ok(true);
         }
     }
+    Ok(false)
+}
+
+/// `--overwrite`: deletes frame files, the state, the history and the whole-run files of this
+/// scene and of the run recorded in the state.
+fn clear_run(dir: &Path, stem: &str) -> Result<()> {
+    let Ok(rd) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    let mut whole = vec![format!("{stem}.glb"), format!("{stem}.usda")];
+    if let Ok(Some(old)) = RunState::load(dir) {
+        whole.push(format!("{}.glb", old.stem));
+        whole.push(format!("{}.usda", old.stem));
+    }
+    for e in rd.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if is_frame_file(&name)
+            || name == STATE_FILE
+            || name == HISTORY_FILE
+            || whole.contains(&name)
+        {
+            std::fs::remove_file(e.path())
+                .with_context(|| format!("{}: cannot delete", e.path().display()))?;
+        }
+    }
+    Ok(())
+}
+
+/// Where the run starts: fresh, or after the frame of a saved state.
+enum Start {
+    Fresh,
+    Resume(RunState),
+}
+
+/// Decides how to start in DIR from `--resume` / `--overwrite` and what DIR holds; refuses
+/// (before anything is written) when the run would mix with another.
+fn plan_start(args: &RunArgs, fp: u64, formats: &str, n: usize, frames: usize) -> Result<Start> {
+    let dir = &args.output;
+    let shown = dir.display();
+    if args.overwrite || !holds_a_run(dir)? {
+        return Ok(Start::Fresh);
+    }
+    let state = RunState::load(dir)?;
+    match state {
+        None if args.resume => bail!(
+            "{shown}: holds frames but no {STATE_FILE} to resume from; use --overwrite to start over"
+        ),
+        None => bail!(
+            "{shown}: already holds frames; use --overwrite to replace them (or another folder)"
+        ),
+        Some(st) if st.fingerprint != fp => bail!(
+            "{shown}: holds a run of another scene (or the scene or its meshes changed since); \
+             use --overwrite to replace it"
+        ),
+        Some(st) if !args.resume => {
+            if st.frame as usize >= frames {
+                bail!(
+                    "{shown}: already holds the complete run of this scene; use --overwrite to run it again"
+                )
+            }
+            bail!(
+                "{shown}: already holds frames 0 to {} of this scene; use --resume to continue or --overwrite to start over",
+                st.frame
+            )
+        }
+        Some(st) if st.formats != formats => bail!(
+            "{shown}: the run was started with --format {}; resume it with the same formats",
+            st.formats
+        ),
+        Some(st) if st.x.len() != n || st.v.len() != n || st.frame as usize > frames => {
+            bail!("{shown}: {STATE_FILE} does not match the scene; use --overwrite to start over")
+        }
+        Some(st) => Ok(Start::Resume(st)),
+    }
+}
+
+/// Runs a scene.
+pub fn run(args: RunArgs) -> Result<()> {
+    // Canonical order (obj, glb, usd, ply), so that `glb,obj` resumes a run of `obj,glb`.
+    let mut formats: Vec<Format> = args.format.clone();
+    formats.sort();
+    formats.dedup();
     // Before anything else may start rayon's default pool.
     if let Some(n) = args.threads {
         rayon::ThreadPoolBuilder::new()
@@ -183,18 +301,65 @@ pub fn run(args: RunArgs) -> Result<()> {
     }
     let scene = Scene::load(&args.scene)?;
     let mut sim = scene.build()?;
-
-    std::fs::create_dir_all(&args.output)
-        .with_context(|| format!("{}: cannot create the output folder", args.output.display()))?;
+    let scene_text = std::fs::read(&args.scene)
+        .with_context(|| format!("{}: cannot read", args.scene.display()))?;
+    let fp = fingerprint(&scene, &scene_text);
+    let format_list = formats
+        .iter()
+        .map(|f| f.name())
+        .collect::<Vec<_>>()
+        .join(",");
+    let frames = scene.frame_count();
+    let dir = &args.output;
     let stem = run_stem(&args.scene);
+    let begin = plan_start(&args, fp, &format_list, sim.model.particle_count(), frames)?;
+
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("{}: cannot create the output folder", dir.display()))?;
+    if args.overwrite {
+        clear_run(dir, &stem)?;
+    }
     let mut writers: Vec<Box<dyn FrameWriter>> = formats
         .iter()
-        .map(|&f| writer_for(f, &args.output, &stem, scene.frame_rate))
+        .map(|&f| writer_for(f, dir, &stem, scene.frame_rate))
         .collect();
     let keep_history = writers.iter().any(|w| w.whole_run());
-    let mut history: Vec<Vec<Vec3>> = Vec::new();
-
-    let frames = scene.frame_count();
+    let (first, mut history) = match begin {
+        Start::Fresh => (
+            0,
+            if keep_history {
+                History::create(dir)?
+            } else {
+                History::none()
+            },
+        ),
+        Start::Resume(st) => {
+            sim.model.x = st.x;
+            sim.model.v = st.v;
+            sim.time = st.time;
+            sim.steps = st.steps;
+            let k = st.frame as usize;
+            let h = if keep_history {
+                History::resume(dir, k + 1, sim.model.particle_count())?
+            } else {
+                History::none()
+            };
+            (k + 1, h)
+        }
+    };
+    let save_state = |k: usize, sim: &drapery::Simulation| -> Result<()> {
+        RunState {
+            fingerprint: fp,
+            frame: k as u64,
+            steps: sim.steps,
+            time: sim.time,
+            formats: format_list.clone(),
+            stem: stem.clone(),
+            x: sim.model.x.clone(),
+            v: sim.model.v.clone(),
+        }
+        .save(dir)
+    };
     let steps_per_frame = scene.steps_per_frame();
     let h = scene.step_size();
     let progress = if args.quiet || !std::io::stderr().is_terminal() {
@@ -213,21 +378,23 @@ pub fn run(args: RunArgs) -> Result<()> {
     let mut cg_total: u64 = 0;
     let mut cg_max: usize = 0;
     let mut steps: u64 = 0;
-    let mut emit = |k: usize,
-                    sim: &drapery::Simulation,
-                    history: &mut Vec<Vec<Vec3>>|
-     -> drapery::Result<()> {
+    let mut emit = |k: usize, sim: &drapery::Simulation, history: &mut History| -> Result<()> {
         for w in writers.iter_mut() {
             w.frame(k, &sim.model)?;
         }
-        if keep_history {
-            history.push(sim.model.x.clone());
+        history.push(&sim.model.x)?;
+        save_state(k, sim)?;
+        if args.stop_after_frames == Some(k) && k < frames {
+            bail!("stopped after frame {k} (--stop-after-frames)");
         }
         Ok(())
     };
-    emit(0, &sim, &mut history)?;
+    if first == 0 {
+        emit(0, &sim, &mut history)?;
+    }
+    progress.set_position(first.saturating_sub(1) as u64);
     let mut failure = None;
-    'frames: for k in 1..=frames {
+    'frames: for k in first.max(1)..=frames {
         for _ in 0..steps_per_frame {
             match sim.step(h) {
                 Ok(report) => {
@@ -239,7 +406,7 @@ pub fn run(args: RunArgs) -> Result<()> {
                     failure = Some(anyhow!(
                         "frame {k}: {e}; frames 0 to {} are in {}",
                         k - 1,
-                        args.output.display()
+                        dir.display()
                     ));
                     break 'frames;
                 }
@@ -255,7 +422,7 @@ pub fn run(args: RunArgs) -> Result<()> {
     // Whole-run files are written even after a blow-up, with the frames done.
     let mut finish_error = None;
     for w in writers.iter_mut() {
-        if let Err(e) = w.finish(&sim.model, &history) {
+        if let Err(e) = w.finish(&sim.model, &history.frames) {
             finish_error.get_or_insert(e);
         }
     }
@@ -275,15 +442,16 @@ pub fn run(args: RunArgs) -> Result<()> {
         } else {
             0.0
         };
+        let resumed = if first > 0 {
+            format!(", resumed after frame {}", first - 1)
+        } else {
+            String::new()
+        };
         println!(
-            "{} frames written to {} ({}): {} steps in {:.2} s wall, CG iterations per step mean {:.1}, max {}",
-            frames + 1,
-            args.output.display(),
-            formats
-                .iter()
-                .map(|f| f.name())
-                .collect::<Vec<_>>()
-                .join(","),
+            "{} frames written to {} ({}{resumed}): {} steps in {:.2} s wall, CG iterations per step mean {:.1}, max {}",
+            frames + 1 - first,
+            dir.display(),
+            format_list,
             steps,
             start.elapsed().as_secs_f64(),
             mean,

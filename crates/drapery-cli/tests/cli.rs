@@ -278,7 +278,15 @@ fn help_explains_every_option() {
     assert!(r.stdout.contains("run") && r.stdout.contains("validate"));
     let r = run(&["run".as_ref(), "--help".as_ref()]);
     assert_eq!(r.code, Some(0));
-    for opt in ["--output", "--format", "--threads", "--quiet", "SCENE"] {
+    for opt in [
+        "--output",
+        "--format",
+        "--threads",
+        "--quiet",
+        "--resume",
+        "--overwrite",
+        "SCENE",
+    ] {
         assert!(r.stdout.contains(opt), "run --help lacks {opt}");
     }
     for f in ["obj", "glb", "usd", "ply"] {
