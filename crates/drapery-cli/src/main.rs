@@ -7,7 +7,9 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod render;
 mod run;
+mod state;
 mod validate;
 
 /// Implicit mass-spring cloth simulation (Baraff & Witkin 1998).
@@ -22,6 +24,8 @@ struct Cli {
 enum Command {
     /// Simulate a scene and write one file per output frame.
     Run(run::RunArgs),
+    /// Draw the frames of a run folder as an animated GIF or a PNG still.
+    Render(render::RenderArgs),
     /// Load and check a scene and its meshes without simulating; print what it holds.
     Validate(validate::ValidateArgs),
 }
@@ -31,6 +35,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => run::run(args),
         Command::Validate(args) => validate::validate(args),
+        Command::Render(args) => render::render_cmd(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

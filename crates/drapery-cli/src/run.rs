@@ -5,11 +5,19 @@
 //! `duration`. Output goes through [`FrameWriter`]s: a per-frame format writes a file in
 //! [`FrameWriter::frame`]; a whole-run format keeps what it needs in memory and writes in
 //! [`FrameWriter::finish`]. Adding a format is one `Format` variant and one writer.
+//!
+//! After each frame the run state is saved (see [`crate::state`]) so that `--resume` continues
+//! a killed run to the same bits; a folder holding another run is refused unless `--overwrite`.
 
+use crate::state::{HISTORY_FILE, History, RunState, STATE_FILE, fingerprint};
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, ValueEnum};
 use drapery::Model;
+use drapery::Vec3;
+use drapery::io::gltf::write_glb;
 use drapery::io::obj::write_obj;
+use drapery::io::ply::write_ply;
+use drapery::io::usd::write_usda;
 use drapery::scene::Scene;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -24,8 +32,9 @@ pub struct RunArgs {
     /// Folder for the output frames (created if missing; existing frame files are overwritten).
     #[arg(short, long, value_name = "DIR")]
     pub output: PathBuf,
-    /// Output formats, comma separated. `obj` writes DIR/frame_00000.obj, frame_00001.obj, …
-    /// (`glb`, `usd` and `ply` are reserved for a later release.)
+    /// Output formats, comma separated: `obj` and `ply` write one file per frame
+    /// (DIR/frame_00000.obj, …), `glb` and `usd` one animation per run (DIR/<scene stem>.glb,
+    /// DIR/<scene stem>.usda, written at the end, also after a blow-up).
     #[arg(
         short,
         long,
@@ -41,22 +50,42 @@ pub struct RunArgs {
     /// No progress bar and no summary line (errors are still printed).
     #[arg(short, long)]
     pub quiet: bool,
+    /// Continue the run in DIR from its last complete frame (DIR/state.bin); the result is
+    /// bit for bit that of an uninterrupted run. Needs the same scene, meshes and formats.
+    /// Starts from frame 0 when DIR holds no run yet.
+    #[arg(long, conflicts_with = "overwrite")]
+    pub resume: bool,
+    /// Replace what DIR holds: delete its frame_* files, state.bin, history.bin and the
+    /// scene's .glb/.usda first. Without --overwrite or --resume, a DIR that already holds
+    /// frames or a state file is refused.
+    #[arg(long)]
+    pub overwrite: bool,
+    /// Testing: stop with an error after frame N is written (as if killed).
+    #[arg(long, hide = true, value_name = "N")]
+    pub stop_after_frames: Option<usize>,
 }
 
 /// Output formats.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, ValueEnum)]
 pub enum Format {
     /// Wavefront OBJ, one file per frame.
     Obj,
-    /// glTF binary with morph targets, one file per run (not available yet).
+    /// glTF binary with morph targets, one file per run: DIR/<scene stem>.glb.
     Glb,
-    /// USD ASCII point cache, one file per run (not available yet).
+    /// USD ASCII point cache, one file per run: DIR/<scene stem>.usda.
     Usd,
-    /// Binary PLY, one file per frame (not available yet).
+    /// Binary little-endian PLY (f64 positions), one file per frame: DIR/frame_00000.ply, ….
     Ply,
 }
 
 impl Format {
+    fn extension(self) -> &'static str {
+        match self {
+            Format::Usd => "usda",
+            other => other.name(),
+        }
+    }
+
     fn name(self) -> &'static str {
         match self {
             Format::Obj => "obj",
@@ -69,10 +98,18 @@ impl Format {
 
 /// A sink for frames.
 pub trait FrameWriter {
-    /// Frame `k` (0-based; frame 0 is the initial state) at simulated time `time`.
-    fn frame(&mut self, k: usize, time: f64, model: &Model) -> drapery::Result<()>;
-    /// Called once after the last frame (not after a failed step).
-    fn finish(&mut self) -> drapery::Result<()> {
+    /// Frame `k` (0-based; frame 0 is the initial state).
+    fn frame(&mut self, _k: usize, _model: &Model) -> drapery::Result<()> {
+        Ok(())
+    }
+    /// True for whole-run formats: the run then keeps every frame's positions in memory and
+    /// hands them to [`FrameWriter::finish`].
+    fn whole_run(&self) -> bool {
+        false
+    }
+    /// Called once at the end with the positions of frames `0..frames.len()` (empty unless some
+    /// writer is [`FrameWriter::whole_run`]); also after a failed step, with the frames done.
+    fn finish(&mut self, _model: &Model, _frames: &[Vec<Vec3>]) -> drapery::Result<()> {
         Ok(())
     }
 }
@@ -83,8 +120,38 @@ struct ObjFrames {
 }
 
 impl FrameWriter for ObjFrames {
-    fn frame(&mut self, k: usize, _time: f64, model: &Model) -> drapery::Result<()> {
+    fn frame(&mut self, k: usize, model: &Model) -> drapery::Result<()> {
         write_obj(&frame_path(&self.dir, k, "obj"), &model.cloths, &model.x)
+    }
+}
+
+/// `DIR/frame_NNNNN.ply`, one binary PLY per frame, each written atomically.
+struct PlyFrames {
+    dir: PathBuf,
+}
+
+impl FrameWriter for PlyFrames {
+    fn frame(&mut self, k: usize, model: &Model) -> drapery::Result<()> {
+        write_ply(&frame_path(&self.dir, k, "ply"), &model.cloths, &model.x)
+    }
+}
+
+/// `DIR/<stem>.glb` or `DIR/<stem>.usda`, written once at the end from every frame.
+struct WholeRun {
+    format: Format,
+    path: PathBuf,
+    frame_rate: f64,
+}
+
+impl FrameWriter for WholeRun {
+    fn whole_run(&self) -> bool {
+        true
+    }
+    fn finish(&mut self, model: &Model, frames: &[Vec<Vec3>]) -> drapery::Result<()> {
+        match self.format {
+            Format::Glb => write_glb(&self.path, &model.cloths, frames, self.frame_rate),
+            _ => write_usda(&self.path, &model.cloths, frames, self.frame_rate),
+        }
     }
 }
 
@@ -93,28 +160,138 @@ pub fn frame_path(dir: &Path, k: usize, ext: &str) -> PathBuf {
     dir.join(format!("frame_{k:05}.{ext}"))
 }
 
-/// The writer of one format, or an error when the format is not available.
-fn writer_for(format: Format, dir: &Path) -> Result<Box<dyn FrameWriter>> {
+/// The file name stem of whole-run outputs: the scene file's stem (`hang` for `hang.toml`).
+fn run_stem(scene: &Path) -> String {
+    scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .filter(|s| !s.is_empty())
+        .unwrap_or_else(|| "drapery".into())
+}
+
+/// The writer of one format.
+fn writer_for(format: Format, dir: &Path, stem: &str, frame_rate: f64) -> Box<dyn FrameWriter> {
+    let dir = dir.to_path_buf();
     match format {
-        Format::Obj => Ok(Box::new(ObjFrames {
-            dir: dir.to_path_buf(),
-        })),
-        other => bail!("format '{}' is not available yet", other.name()),
+        Format::Obj => Box::new(ObjFrames { dir }),
+        Format::Ply => Box::new(PlyFrames { dir }),
+        Format::Glb | Format::Usd => Box::new(WholeRun {
+            format,
+            path: dir.join(format!("{stem}.{}", format.extension())),
+            frame_rate,
+        }),
+    }
+}
+
+/// True for `frame_<digits>.obj` / `.ply` and for the temporary files of atomic writes of those.
+fn is_frame_file(name: &str) -> bool {
+    let name = name.strip_prefix('.').unwrap_or(name);
+    let Some(rest) = name.strip_prefix("frame_") else {
+        return false;
+    };
+    let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
+    let ext = &rest[digits..];
+    digits > 0 && (ext.starts_with(".obj") || ext.starts_with(".ply"))
+}
+
+/// Whether DIR holds frames or a run state.
+fn holds_a_run(dir: &Path) -> Result<bool> {
+    let rd = match std::fs::read_dir(dir) {
+        Ok(rd) => rd,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(false),
+        Err(e) => {
+            return Err(e)
+                .with_context(|| format!("{}: cannot read the output folder", dir.display()));
+        }
+    };
+    for e in rd.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if is_frame_file(&name) || name == STATE_FILE || name == HISTORY_FILE {
+            return Ok(true);
+        }
+    }
+    Ok(false)
+}
+
+/// `--overwrite`: deletes frame files, the state, the history and the whole-run files of this
+/// scene and of the run recorded in the state.
+fn clear_run(dir: &Path, stem: &str) -> Result<()> {
+    let Ok(rd) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    let mut whole = vec![format!("{stem}.glb"), format!("{stem}.usda")];
+    if let Ok(Some(old)) = RunState::load(dir) {
+        whole.push(format!("{}.glb", old.stem));
+        whole.push(format!("{}.usda", old.stem));
+    }
+    for e in rd.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if is_frame_file(&name)
+            || name == STATE_FILE
+            || name == HISTORY_FILE
+            || whole.contains(&name)
+        {
+            std::fs::remove_file(e.path())
+                .with_context(|| format!("{}: cannot delete", e.path().display()))?;
+        }
+    }
+    Ok(())
+}
+
+/// Where the run starts: fresh, or after the frame of a saved state.
+enum Start {
+    Fresh,
+    Resume(RunState),
+}
+
+/// Decides how to start in DIR from `--resume` / `--overwrite` and what DIR holds; refuses
+/// (before anything is written) when the run would mix with another.
+fn plan_start(args: &RunArgs, fp: u64, formats: &str, n: usize, frames: usize) -> Result<Start> {
+    let dir = &args.output;
+    let shown = dir.display();
+    if args.overwrite || !holds_a_run(dir)? {
+        return Ok(Start::Fresh);
+    }
+    let state = RunState::load(dir)?;
+    match state {
+        None if args.resume => bail!(
+            "{shown}: holds frames but no {STATE_FILE} to resume from; use --overwrite to start over"
+        ),
+        None => bail!(
+            "{shown}: already holds frames; use --overwrite to replace them (or another folder)"
+        ),
+        Some(st) if st.fingerprint != fp => bail!(
+            "{shown}: holds a run of another scene (or the scene or its meshes changed since); \
+             use --overwrite to replace it"
+        ),
+        Some(st) if !args.resume => {
+            if st.frame as usize >= frames {
+                bail!(
+                    "{shown}: already holds the complete run of this scene; use --overwrite to run it again"
+                )
+            }
+            bail!(
+                "{shown}: already holds frames 0 to {} of this scene; use --resume to continue or --overwrite to start over",
+                st.frame
+            )
+        }
+        Some(st) if st.formats != formats => bail!(
+            "{shown}: the run was started with --format {}; resume it with the same formats",
+            st.formats
+        ),
+        Some(st) if st.x.len() != n || st.v.len() != n || st.frame as usize > frames => {
+            bail!("{shown}: {STATE_FILE} does not match the scene; use --overwrite to start over")
+        }
+        Some(st) => Ok(Start::Resume(st)),
     }
 }
 
 /// Runs a scene.
 pub fn run(args: RunArgs) -> Result<()> {
-    let mut formats: Vec<Format> = Vec::new();
-    for &f in &args.format {
-        if !formats.contains(&f) {
-            formats.push(f);
-        }
-    }
-    for &f in &formats {
-        // Reject unavailable formats before anything is loaded or written.
-        writer_for(f, &args.output)?;
-    }
+    // Canonical order (obj, glb, usd, ply), so that `glb,obj` resumes a run of `obj,glb`.
+    let mut formats: Vec<Format> = args.format.clone();
+    formats.sort();
+    formats.dedup();
     // Before anything else may start rayon's default pool.
     if let Some(n) = args.threads {
         rayon::ThreadPoolBuilder::new()
@@ -124,15 +301,65 @@ pub fn run(args: RunArgs) -> Result<()> {
     }
     let scene = Scene::load(&args.scene)?;
     let mut sim = scene.build()?;
-
-    std::fs::create_dir_all(&args.output)
-        .with_context(|| format!("{}: cannot create the output folder", args.output.display()))?;
-    let mut writers = formats
+    let scene_text = std::fs::read(&args.scene)
+        .with_context(|| format!("{}: cannot read", args.scene.display()))?;
+    let fp = fingerprint(&scene, &scene_text);
+    let format_list = formats
         .iter()
-        .map(|&f| writer_for(f, &args.output))
-        .collect::<Result<Vec<_>>>()?;
-
+        .map(|f| f.name())
+        .collect::<Vec<_>>()
+        .join(",");
     let frames = scene.frame_count();
+    let dir = &args.output;
+    let stem = run_stem(&args.scene);
+    let begin = plan_start(&args, fp, &format_list, sim.model.particle_count(), frames)?;
+
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("{}: cannot create the output folder", dir.display()))?;
+    if args.overwrite {
+        clear_run(dir, &stem)?;
+    }
+    let mut writers: Vec<Box<dyn FrameWriter>> = formats
+        .iter()
+        .map(|&f| writer_for(f, dir, &stem, scene.frame_rate))
+        .collect();
+    let keep_history = writers.iter().any(|w| w.whole_run());
+    let (first, mut history) = match begin {
+        Start::Fresh => (
+            0,
+            if keep_history {
+                History::create(dir)?
+            } else {
+                History::none()
+            },
+        ),
+        Start::Resume(st) => {
+            sim.model.x = st.x;
+            sim.model.v = st.v;
+            sim.time = st.time;
+            sim.steps = st.steps;
+            let k = st.frame as usize;
+            let h = if keep_history {
+                History::resume(dir, k + 1, sim.model.particle_count())?
+            } else {
+                History::none()
+            };
+            (k + 1, h)
+        }
+    };
+    let save_state = |k: usize, sim: &drapery::Simulation| -> Result<()> {
+        RunState {
+            fingerprint: fp,
+            frame: k as u64,
+            steps: sim.steps,
+            time: sim.time,
+            formats: format_list.clone(),
+            stem: stem.clone(),
+            x: sim.model.x.clone(),
+            v: sim.model.v.clone(),
+        }
+        .save(dir)
+    };
     let steps_per_frame = scene.steps_per_frame();
     let h = scene.step_size();
     let progress = if args.quiet || !std::io::stderr().is_terminal() {
@@ -151,32 +378,62 @@ pub fn run(args: RunArgs) -> Result<()> {
     let mut cg_total: u64 = 0;
     let mut cg_max: usize = 0;
     let mut steps: u64 = 0;
-    for w in writers.iter_mut() {
-        w.frame(0, 0.0, &sim.model)?;
-    }
-    for k in 1..=frames {
-        for _ in 0..steps_per_frame {
-            let report = sim.step(h).map_err(|e| {
-                progress.abandon();
-                anyhow!(
-                    "frame {k}: {e}; frames 0 to {} are in {}",
-                    k - 1,
-                    args.output.display()
-                )
-            })?;
-            steps += 1;
-            cg_total += report.cg_iterations as u64;
-            cg_max = cg_max.max(report.cg_iterations);
-        }
-        let time = k as f64 / scene.frame_rate;
+    let mut emit = |k: usize, sim: &drapery::Simulation, history: &mut History| -> Result<()> {
         for w in writers.iter_mut() {
-            w.frame(k, time, &sim.model)?;
+            w.frame(k, &sim.model)?;
         }
-        progress.set_message(format!("{time:.3} s"));
+        history.push(&sim.model.x)?;
+        save_state(k, sim)?;
+        if args.stop_after_frames == Some(k) && k < frames {
+            bail!("stopped after frame {k} (--stop-after-frames)");
+        }
+        Ok(())
+    };
+    if first == 0 {
+        emit(0, &sim, &mut history)?;
+    }
+    progress.set_position(first.saturating_sub(1) as u64);
+    let mut failure = None;
+    'frames: for k in first.max(1)..=frames {
+        for _ in 0..steps_per_frame {
+            match sim.step(h) {
+                Ok(report) => {
+                    steps += 1;
+                    cg_total += report.cg_iterations as u64;
+                    cg_max = cg_max.max(report.cg_iterations);
+                }
+                Err(e) => {
+                    failure = Some(anyhow!(
+                        "frame {k}: {e}; frames 0 to {} are in {}",
+                        k - 1,
+                        dir.display()
+                    ));
+                    break 'frames;
+                }
+            }
+        }
+        emit(k, &sim, &mut history)?;
+        progress.set_message(format!("{:.3} s", k as f64 / scene.frame_rate));
         progress.inc(1);
     }
+    if failure.is_some() {
+        progress.abandon();
+    }
+    // Whole-run files are written even after a blow-up, with the frames done.
+    let mut finish_error = None;
     for w in writers.iter_mut() {
-        w.finish()?;
+        if let Err(e) = w.finish(&sim.model, &history.frames) {
+            finish_error.get_or_insert(e);
+        }
+    }
+    if let Some(e) = failure {
+        return Err(match finish_error {
+            Some(f) => e.context(format!("also: {f}")),
+            None => e,
+        });
+    }
+    if let Some(e) = finish_error {
+        return Err(e.into());
     }
     progress.finish_and_clear();
     if !args.quiet {
@@ -185,15 +442,16 @@ pub fn run(args: RunArgs) -> Result<()> {
         } else {
             0.0
         };
+        let resumed = if first > 0 {
+            format!(", resumed after frame {}", first - 1)
+        } else {
+            String::new()
+        };
         println!(
-            "{} frames written to {} ({}): {} steps in {:.2} s wall, CG iterations per step mean {:.1}, max {}",
-            frames + 1,
-            args.output.display(),
-            formats
-                .iter()
-                .map(|f| f.name())
-                .collect::<Vec<_>>()
-                .join(","),
+            "{} frames written to {} ({}{resumed}): {} steps in {:.2} s wall, CG iterations per step mean {:.1}, max {}",
+            frames + 1 - first,
+            dir.display(),
+            format_list,
             steps,
             start.elapsed().as_secs_f64(),
             mean,

@@ -1,0 +1,286 @@
+//! `drapery run --resume` / `--overwrite`: an interrupted run continues to exactly the bits of an
+//! uninterrupted one, and a folder holding another run is never mixed into silently.
+
+use assert_cmd::Command;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+fn examples() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
+}
+
+struct Out {
+    code: Option<i32>,
+    stdout: String,
+    stderr: String,
+}
+
+fn drapery<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Out {
+    let o = Command::new(env!("CARGO_BIN_EXE_drapery"))
+        .args(args)
+        .output()
+        .unwrap();
+    Out {
+        code: o.status.code(),
+        stdout: String::from_utf8_lossy(&o.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&o.stderr).into_owned(),
+    }
+}
+
+fn run_args(scene: &Path, out: &Path, extra: &[&str]) -> Vec<std::ffi::OsString> {
+    let mut v: Vec<std::ffi::OsString> = vec![
+        "run".into(),
+        scene.into(),
+        "-o".into(),
+        out.into(),
+        "-q".into(),
+    ];
+    v.extend(extra.iter().map(|s| s.into()));
+    v
+}
+
+/// Every file of a folder (name → bytes).
+fn contents(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect()
+}
+
+fn assert_same_folders(want: &Path, got: &Path) {
+    let (a, b) = (contents(want), contents(got));
+    assert_eq!(
+        a.keys().collect::<Vec<_>>(),
+        b.keys().collect::<Vec<_>>(),
+        "different file sets"
+    );
+    for (name, bytes) in &a {
+        assert!(
+            bytes == &b[name],
+            "{name} differs from the uninterrupted run"
+        );
+    }
+}
+
+fn assert_one_error(r: &Out, wants: &[&str]) {
+    assert_eq!(r.code, Some(1), "stdout {} stderr {}", r.stdout, r.stderr);
+    assert_eq!(r.stderr.lines().count(), 1, "{}", r.stderr);
+    assert!(r.stderr.starts_with("error: "), "{}", r.stderr);
+    assert!(!r.stderr.contains("panicked"), "{}", r.stderr);
+    for w in wants {
+        assert!(r.stderr.contains(w), "{:?} lacks {w:?}", r.stderr);
+    }
+}
+
+const ALL: &str = "obj,glb,usd,ply";
+
+#[test]
+fn a_stopped_run_resumes_to_the_same_bits_in_every_file() {
+    let scene = examples().join("hang.toml");
+    let tmp = tempfile::tempdir().unwrap();
+    let (full, cut) = (tmp.path().join("full"), tmp.path().join("cut"));
+    let r = drapery(&run_args(&scene, &full, &["-f", ALL]));
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+
+    let r = drapery(&run_args(
+        &scene,
+        &cut,
+        &["-f", ALL, "--stop-after-frames", "17"],
+    ));
+    assert_one_error(&r, &["stopped after frame 17"]);
+    assert!(cut.join("frame_00017.obj").exists());
+    assert!(!cut.join("frame_00018.obj").exists());
+    assert!(
+        !cut.join("hang.glb").exists(),
+        "a killed run writes no whole-run file"
+    );
+    assert!(cut.join("state.bin").exists());
+
+    // A plain rerun is refused and changes nothing.
+    let before = contents(&cut);
+    let r = drapery(&run_args(&scene, &cut, &["-f", ALL]));
+    assert_one_error(
+        &r,
+        &["frames 0 to 17 of this scene", "--resume", "--overwrite"],
+    );
+    // Resuming with other formats is refused too.
+    let r = drapery(&run_args(&scene, &cut, &["-f", "obj", "--resume"]));
+    assert_one_error(&r, &["--format obj,glb,usd,ply"]);
+    assert!(contents(&cut) == before, "a refused run changed the folder");
+
+    // Stop once more further on (formats in another order are the same set), then finish.
+    let r = drapery(&run_args(
+        &scene,
+        &cut,
+        &[
+            "-f",
+            "ply,usd,glb,obj",
+            "--resume",
+            "--stop-after-frames",
+            "40",
+        ],
+    ));
+    assert_one_error(&r, &["stopped after frame 40"]);
+    let mut args = run_args(&scene, &cut, &["-f", ALL, "--resume"]);
+    args.retain(|a| a != "-q");
+    let r = drapery(&args);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert!(r.stdout.contains("20 frames written"), "{}", r.stdout);
+    assert!(r.stdout.contains("resumed after frame 40"), "{}", r.stdout);
+    assert_same_folders(&full, &cut);
+
+    // Resuming a complete run changes nothing; a plain rerun is refused.
+    let r = drapery(&run_args(&scene, &cut, &["-f", ALL, "--resume"]));
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert_same_folders(&full, &cut);
+    let r = drapery(&run_args(&scene, &cut, &["-f", ALL]));
+    assert_one_error(&r, &["complete run of this scene", "--overwrite"]);
+}
+
+/// A 17 × 17 sheet over 2 s at 60 frames per second: 121 frames.
+const SMALL: &str = r#"
+[simulation]
+duration = 2.0
+dt = 0.008333333333333333
+frame_rate = 60
+
+[[cloth]]
+name = "sheet"
+grid = { size = [1.0, 1.0], resolution = [17, 17], center = [0.0, 1.0, 0.0], normal = [0.0, 0.0, 1.0] }
+density = 0.1
+pin = [0, 16]
+initial_velocity = [0.0, 0.0, 0.5]
+"#;
+
+#[test]
+fn a_killed_run_resumes_to_the_same_bits() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = tmp.path().join("small.toml");
+    std::fs::write(&scene, SMALL).unwrap();
+    let (full, cut) = (tmp.path().join("full"), tmp.path().join("cut"));
+    let r = drapery(&run_args(&scene, &full, &["-f", "obj,glb"]));
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_drapery"))
+        .args(run_args(&scene, &cut, &["-f", "obj,glb"]))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while !cut.join("frame_00010.obj").exists() {
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "no frame 10 after 60 s"
+        );
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    child.kill().unwrap();
+    let status = child.wait().unwrap();
+    assert!(
+        !status.success(),
+        "the run finished before it could be killed"
+    );
+    assert!(!cut.join("frame_00120.obj").exists());
+    assert!(!cut.join("small.glb").exists());
+
+    let r = drapery(&run_args(&scene, &cut, &["-f", "obj,glb", "--resume"]));
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    // Temporary files of a write cut short may remain; everything else is identical.
+    for e in std::fs::read_dir(&cut).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().into_owned();
+        if name.starts_with('.') && name.contains(".tmp") {
+            std::fs::remove_file(cut.join(name)).unwrap();
+        }
+    }
+    assert_same_folders(&full, &cut);
+}
+
+#[test]
+fn resume_without_a_run_starts_from_frame_zero() {
+    let scene = examples().join("three_particles.toml");
+    let tmp = tempfile::tempdir().unwrap();
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    assert_eq!(drapery(&run_args(&scene, &a, &[])).code, Some(0));
+    let r = drapery(&run_args(&scene, &b, &["--resume"]));
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert_same_folders(&a, &b);
+}
+
+#[test]
+fn a_folder_of_another_scene_is_refused_unless_overwrite() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let chain = examples().join("chain.toml");
+    let three = examples().join("three_particles.toml");
+    assert_eq!(
+        drapery(&run_args(&chain, &out, &["-f", "ply,usd"])).code,
+        Some(0)
+    );
+    let before = contents(&out);
+    assert!(before.contains_key("frame_00100.ply") && before.contains_key("chain.usda"));
+    for extra in [&[][..], &["--resume"][..]] {
+        let r = drapery(&run_args(&three, &out, extra));
+        assert_one_error(&r, &["another scene", "--overwrite"]);
+        assert!(contents(&out) == before, "a refused run changed the folder");
+    }
+    // Both flags at once is a usage error.
+    let r = drapery(&run_args(&three, &out, &["--resume", "--overwrite"]));
+    assert_eq!(r.code, Some(2));
+
+    let r = drapery(&run_args(&three, &out, &["--overwrite"]));
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let after = contents(&out);
+    let frames: Vec<&String> = after.keys().filter(|n| n.starts_with("frame_")).collect();
+    // three_particles: 2 s at 30 frames per second = 61 OBJ frames, no PLY left over.
+    let reference = tmp.path().join("ref");
+    assert_eq!(drapery(&run_args(&three, &reference, &[])).code, Some(0));
+    assert_same_folders(&reference, &out);
+    assert!(frames.iter().all(|n| n.ends_with(".obj")), "{frames:?}");
+
+    // Frames without a state (e.g. from elsewhere) are not resumed over.
+    let stray = tmp.path().join("stray");
+    std::fs::create_dir(&stray).unwrap();
+    std::fs::write(stray.join("frame_00000.obj"), "v 0 0 0\n").unwrap();
+    let r = drapery(&run_args(&three, &stray, &["--resume"]));
+    assert_one_error(&r, &["no state.bin", "--overwrite"]);
+    let r = drapery(&run_args(&three, &stray, &[]));
+    assert_one_error(&r, &["already holds frames", "--overwrite"]);
+}
+
+#[test]
+fn an_edited_mesh_or_a_damaged_state_is_not_resumed() {
+    let tmp = tempfile::tempdir().unwrap();
+    for f in ["chain.toml", "chain.obj"] {
+        std::fs::copy(examples().join(f), tmp.path().join(f)).unwrap();
+    }
+    let scene = tmp.path().join("chain.toml");
+    let out = tmp.path().join("out");
+    let r = drapery(&run_args(&scene, &out, &["--stop-after-frames", "5"]));
+    assert_one_error(&r, &["stopped after frame 5"]);
+
+    // Same scene text, one mesh vertex moved: another scene.
+    let mesh = std::fs::read_to_string(tmp.path().join("chain.obj")).unwrap();
+    let edited = mesh.replacen("v 0.0 1.0 0.0", "v 0.0 1.0 0.001", 1);
+    assert_ne!(mesh, edited);
+    std::fs::write(tmp.path().join("chain.obj"), &edited).unwrap();
+    let r = drapery(&run_args(&scene, &out, &["--resume"]));
+    assert_one_error(&r, &["another scene"]);
+    std::fs::write(tmp.path().join("chain.obj"), &mesh).unwrap();
+
+    // A damaged state is named.
+    let state = out.join("state.bin");
+    let mut bytes = std::fs::read(&state).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 0x40;
+    std::fs::write(&state, &bytes).unwrap();
+    let r = drapery(&run_args(&scene, &out, &["--resume"]));
+    assert_one_error(&r, &["state.bin", "damaged", "--overwrite"]);
+}
