@@ -336,6 +336,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         Start::Resume(st) => {
             sim.model.x = st.x;
             sim.model.v = st.v;
+            sim.warm_start = st.warm_start;
             sim.time = st.time;
             sim.steps = st.steps;
             let k = st.frame as usize;
@@ -357,6 +358,7 @@ pub fn run(args: RunArgs) -> Result<()> {
             stem: stem.clone(),
             x: sim.model.x.clone(),
             v: sim.model.v.clone(),
+            warm_start: sim.warm_start.clone(),
         }
         .save(dir)
     };

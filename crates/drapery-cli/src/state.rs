@@ -8,10 +8,10 @@
 //! state is written; the state tells how many frames of it are valid, so bytes appended by a
 //! killed run after its last state are cut off on resume.
 //!
-//! `state.bin` layout (little endian): the magic `DRAPERY-STATE-1\n`, then u64 fingerprint,
+//! `state.bin` layout (little endian): the magic `DRAPERY-STATE-2\n`, then u64 fingerprint,
 //! u64 frame, u64 steps, u64 time bits, u32 length + UTF-8 format list (`obj,glb`), u32
 //! length + UTF-8 whole-run file stem (`hang`), u64
-//! particle count n, 3n f64 positions, 3n f64 velocities, and a u64 FNV-1a checksum of
+//! particle count n, 3n f64 positions, 3n f64 velocities, 3n f64 warm-start velocity changes, and a u64 FNV-1a checksum of
 //! everything before it.
 
 use anyhow::{Context, Result, bail};
@@ -20,7 +20,7 @@ use drapery::scene::Scene;
 use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
-const MAGIC: &[u8] = b"DRAPERY-STATE-1\n";
+const MAGIC: &[u8] = b"DRAPERY-STATE-2\n";
 /// The state file in a run folder.
 pub const STATE_FILE: &str = "state.bin";
 /// The frame history kept for whole-run formats.
@@ -95,6 +95,8 @@ pub struct RunState {
     pub stem: String,
     pub x: Vec<Vec3>,
     pub v: Vec<Vec3>,
+    /// The solver's warm start (previous velocity change).
+    pub warm_start: Vec<Vec3>,
 }
 
 fn push_vecs(out: &mut Vec<u8>, v: &[Vec3]) {
@@ -124,6 +126,7 @@ impl RunState {
         out.extend_from_slice(&(self.x.len() as u64).to_le_bytes());
         push_vecs(&mut out, &self.x);
         push_vecs(&mut out, &self.v);
+        push_vecs(&mut out, &self.warm_start);
         let sum = Fnv::new().bytes(&out).finish();
         out.extend_from_slice(&sum.to_le_bytes());
         out
@@ -149,11 +152,12 @@ impl RunState {
         let formats = r.text().ok_or_else(damaged)?;
         let stem = r.text().ok_or_else(damaged)?;
         let n = r.u64().ok_or_else(damaged)? as usize;
-        if n.checked_mul(48) != Some(body.len().saturating_sub(r.at)) {
+        if n.checked_mul(72) != Some(body.len().saturating_sub(r.at)) {
             return Err(damaged());
         }
         let x = decode_vecs(r.take(24 * n).ok_or_else(damaged)?);
         let v = decode_vecs(r.take(24 * n).ok_or_else(damaged)?);
+        let warm_start = decode_vecs(r.take(24 * n).ok_or_else(damaged)?);
         Ok(RunState {
             fingerprint,
             frame,
@@ -163,6 +167,7 @@ impl RunState {
             stem,
             x,
             v,
+            warm_start,
         })
     }
 
@@ -321,6 +326,10 @@ mod tests {
                 Vec3::new(1e300, 2.5, -3.0),
             ],
             v: vec![Vec3::new(1.0 / 3.0, 0.0, -1e-300), Vec3::ZERO],
+            warm_start: vec![
+                Vec3::new(0.25, -0.0, 1e-5),
+                Vec3::new(f64::MIN_POSITIVE, 2.0, 3.0),
+            ],
         };
         let b = s.to_bytes();
         let r = RunState::from_bytes(&b).unwrap();
