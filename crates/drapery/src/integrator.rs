@@ -345,6 +345,7 @@ impl Simulation {
                 self.time,
                 h,
                 c.thickness,
+                self.model.gravity.length() * h,
             ),
             None => Vec::new(),
         };
@@ -516,9 +517,22 @@ impl Simulation {
         // Friction, then the fail-safe: nothing crosses anything over the step.
         if let Some(c) = &collision {
             let tc = Instant::now();
+            // The push back to the thickness is a position correction: the particle keeps the
+            // solved normal displacement but ends the step at rest on the surface (inelastic
+            // contact), not flying off it. Friction then acts on the tangential velocity.
+            let solved = v.clone();
+            for ct in &contacts {
+                let i = ct.particle as usize;
+                let vn = ct.normal.dot(v[i]);
+                v[i] += ct.normal * (ct.normal.dot(ct.surface_velocity) - vn);
+            }
             response::apply_friction(&mut v, &self.model.mass, &contacts, &impulse);
             for i in 0..n {
                 x[i] = x0[i] + h * v[i];
+            }
+            for ct in &contacts {
+                let i = ct.particle as usize;
+                x[i] += h * ct.normal * ct.normal.dot(solved[i] - v[i]);
             }
             let before = x.clone();
             match response::failsafe(

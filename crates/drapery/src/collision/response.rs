@@ -55,9 +55,15 @@ fn contact(o: &Obstacle, p: Vec3, t: f64) -> (f64, Vec3, Vec3) {
     }
 }
 
-/// Contacts at the start of a step: free particles within `thickness` of an obstacle whose
-/// normal velocity relative to it is below what would carry them back to the thickness in
-/// one step. The deepest obstacle wins when there are several.
+/// Contacts at the start of a step: free particles within twice the `thickness` of an obstacle
+/// whose normal velocity relative to it is below what would bring them to the thickness in one
+/// step, plus `slack` (use `|g| h`: gravity can turn a particle around within the step, and
+/// rounding must not drop a particle resting exactly at the thickness). The constraint prescribes exactly that normal velocity; the solver releases every
+/// contact whose impulse would pull (see the active-set loop in the integrator), so a particle
+/// only feels the obstacle when it would otherwise end closer than the thickness. Resting
+/// contact therefore holds every step (no alternating contact and free flight), which is what
+/// lets static friction hold. The deepest obstacle wins when there are several.
+#[allow(clippy::too_many_arguments)]
 pub fn obstacle_contacts(
     x: &[Vec3],
     v: &[Vec3],
@@ -66,6 +72,7 @@ pub fn obstacle_contacts(
     t: f64,
     h: f64,
     thickness: f64,
+    slack: f64,
 ) -> Vec<ObstacleContact> {
     if obstacles.is_empty() {
         return Vec::new();
@@ -80,9 +87,9 @@ pub fn obstacle_contacts(
             let mut best: Option<(f64, ObstacleContact)> = None;
             for o in obstacles {
                 let (d, n, vs) = contact(o, x[i], t);
-                if d < thickness && best.as_ref().is_none_or(|(bd, _)| d < *bd) {
+                if d < 2.0 * thickness && best.as_ref().is_none_or(|(bd, _)| d < *bd) {
                     let target = n.dot(vs) + (thickness - d) / h;
-                    if n.dot(v[i]) <= target {
+                    if n.dot(v[i]) <= target + slack {
                         best = Some((
                             d,
                             ObstacleContact {

@@ -1,5 +1,6 @@
 //! Integration tests of the drapery library, gathered in one binary (one link step).
 
+mod collisions;
 mod common;
 mod determinism;
 mod equilibrium;

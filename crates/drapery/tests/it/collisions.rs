@@ -1,0 +1,301 @@
+//! Collisions end to end at the library level: obstacles, friction, self-contact, no tunneling.
+
+use drapery::collision::check::{count_penetrations, count_self_intersections};
+use drapery::collision::colliders::{Collider, RigidMotion, Shape, TriangleMesh};
+use drapery::collision::settings::{CollisionSettings, Obstacle};
+use drapery::math::Vec3;
+use drapery::mesh::Mesh;
+use drapery::model::{ClothDesc, MassSpec, Material, Model};
+use drapery::{Simulation, SolverSettings};
+
+fn sheet(name: &str, n: usize, size: f64, center: Vec3, normal: Vec3, velocity: Vec3) -> ClothDesc {
+    ClothDesc {
+        name: name.into(),
+        mesh: Mesh::grid([size, size], [n, n], center, normal).unwrap(),
+        material: Material {
+            stretch_stiffness: 500.0,
+            shear_stiffness: 50.0,
+            bend_stiffness: 0.5,
+            damping: 0.02,
+            air_drag: 0.001,
+            mass: MassSpec::Density(0.2),
+        },
+        pins: vec![],
+        initial_velocity: velocity,
+    }
+}
+
+fn sim(
+    cloths: Vec<ClothDesc>,
+    obstacles: Vec<Obstacle>,
+    collision: CollisionSettings,
+) -> Simulation {
+    let mut model = Model::new(cloths, Vec3::new(0.0, -9.81, 0.0)).unwrap();
+    model.collision = Some(collision);
+    model.obstacles = obstacles;
+    Simulation::new(
+        model,
+        SolverSettings {
+            tolerance: 1e-4,
+            max_iterations: 5000,
+            ..Default::default()
+        },
+    )
+    .unwrap()
+}
+
+fn colliders(s: &Simulation) -> Vec<Collider> {
+    s.model
+        .obstacles
+        .iter()
+        .map(|o| o.collider.clone())
+        .collect()
+}
+
+/// Runs `steps` steps of `h`, asserting after each that no cloth triangles intersect and no
+/// particle is inside an analytic obstacle.
+fn run_clean(s: &mut Simulation, steps: usize, h: f64) {
+    let tris = s.model.triangles();
+    for k in 0..steps {
+        let r = s.step(h).unwrap_or_else(|e| panic!("step {k}: {e}"));
+        let _ = r;
+        assert_eq!(
+            count_self_intersections(&s.model.x, &tris),
+            0,
+            "self-intersection after step {k}"
+        );
+        assert_eq!(
+            count_penetrations(&s.model.x, &colliders(s), s.time, 0.0),
+            0,
+            "penetration after step {k}"
+        );
+    }
+}
+
+#[test]
+fn a_sheet_drapes_over_a_sphere_without_penetrating_it() {
+    let sphere = Obstacle {
+        collider: Collider::fixed(Shape::Sphere {
+            center: Vec3::ZERO,
+            radius: 0.3,
+        }),
+        friction: 0.3,
+    };
+    let mut s = sim(
+        vec![sheet(
+            "sheet",
+            21,
+            1.0,
+            Vec3::new(0.0, 0.4, 0.0),
+            Vec3::Y,
+            Vec3::ZERO,
+        )],
+        vec![sphere],
+        CollisionSettings {
+            thickness: 0.01,
+            ..Default::default()
+        },
+    );
+    run_clean(&mut s, 90, 1.0 / 60.0);
+    // the centre of the sheet rests on top of the sphere, about one thickness above it
+    let centre = s.model.x[10 * 21 + 10];
+    assert!(
+        (centre.length() - 0.31).abs() < 0.01,
+        "centre at {centre:?}"
+    );
+    // the corners hang below the top of the sphere
+    assert!(s.model.x[0].y < 0.1, "corner at {:?}", s.model.x[0]);
+}
+
+#[test]
+fn a_fast_sheet_does_not_tunnel_through_a_zero_thickness_plate() {
+    // plate: a 1 m square of two triangles in the plane y = 0
+    let plate = TriangleMesh::new(
+        vec![
+            Vec3::new(-0.5, 0.0, -0.5),
+            Vec3::new(0.5, 0.0, -0.5),
+            Vec3::new(0.5, 0.0, 0.5),
+            Vec3::new(-0.5, 0.0, 0.5),
+        ],
+        vec![[0, 2, 1], [0, 3, 2]],
+    );
+    let plate = Obstacle {
+        collider: Collider::fixed(Shape::Mesh(plate)),
+        friction: 0.2,
+    };
+    // 0.2 m sheet 5 cm above the plate, thrown down at 40 m/s: it would cross in one step
+    let mut s = sim(
+        vec![sheet(
+            "fast",
+            9,
+            0.2,
+            Vec3::new(0.0, 0.05, 0.0),
+            Vec3::Y,
+            Vec3::new(0.0, -40.0, 0.0),
+        )],
+        vec![plate],
+        CollisionSettings {
+            thickness: 0.005,
+            ..Default::default()
+        },
+    );
+    run_clean(&mut s, 30, 1.0 / 60.0);
+    for p in &s.model.x {
+        assert!(p.y > 0.0, "a vertex went through the plate: {p:?}");
+    }
+}
+
+#[test]
+fn a_sheet_falling_on_the_ground_piles_up_without_intersecting_itself() {
+    let ground = Obstacle {
+        collider: Collider::fixed(Shape::Plane {
+            point: Vec3::ZERO,
+            normal: Vec3::Y,
+        }),
+        friction: 0.5,
+    };
+    // a sheet held almost upright, thrown sideways at the floor: its foot stops, the rest folds over it
+    let mut s = sim(
+        vec![sheet(
+            "sheet",
+            17,
+            0.6,
+            Vec3::new(0.0, 0.35, 0.0),
+            Vec3::new(0.0, 0.2, 1.0),
+            Vec3::new(0.0, -0.5, 1.0),
+        )],
+        vec![ground],
+        CollisionSettings {
+            thickness: 0.008,
+            ..Default::default()
+        },
+    );
+    run_clean(&mut s, 120, 1.0 / 60.0);
+    let top = s.model.x.iter().map(|p| p.y).fold(f64::MIN, f64::max);
+    assert!(top < 0.2, "the sheet did not fall: top at {top}");
+    assert!(s.model.x.iter().all(|p| p.y > 0.0));
+}
+
+#[test]
+fn friction_holds_a_sheet_on_a_tilted_plane_and_without_it_the_sheet_slides() {
+    let tilt = 20f64.to_radians(); // tan 20° ≈ 0.36
+    let normal = Vec3::new(-tilt.sin(), tilt.cos(), 0.0);
+    let mut travel = Vec::new();
+    for mu in [0.8, 0.0] {
+        let plane = Obstacle {
+            collider: Collider::fixed(Shape::Plane {
+                point: Vec3::ZERO,
+                normal,
+            }),
+            friction: mu,
+        };
+        let centre = normal * 0.008;
+        let mut s = sim(
+            vec![sheet("sheet", 9, 0.3, centre, normal, Vec3::ZERO)],
+            vec![plane],
+            CollisionSettings {
+                thickness: 0.01,
+                self_collision: false,
+                ..Default::default()
+            },
+        );
+        let x0 = s.model.x[40];
+        run_clean(&mut s, 60, 1.0 / 60.0);
+        travel.push((s.model.x[40] - x0).length());
+    }
+    assert!(
+        travel[0] < 0.01,
+        "with μ = 0.8 the sheet slid {} m",
+        travel[0]
+    );
+    assert!(
+        travel[1] > 0.5,
+        "without friction the sheet slid only {} m",
+        travel[1]
+    );
+}
+
+#[test]
+fn a_spinning_sphere_drags_the_sheet_around_by_friction() {
+    // Lay a small sheet on top of a large still sphere, then spin the sphere at ω = 1.5 rad/s about +y (surface
+    // points move toward decreasing atan2(z, x)): the part of the sheet resting on top turns with
+    // the surface. (A sphere's pose does not depend on its rotation, so the spin can start mid-run.)
+    let sphere = Obstacle {
+        collider: Collider::fixed(Shape::Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        }),
+        friction: 0.8,
+    };
+    let mut s = sim(
+        vec![sheet(
+            "sheet",
+            9,
+            0.3,
+            Vec3::new(0.0, 1.011, 0.0),
+            Vec3::Y,
+            Vec3::ZERO,
+        )],
+        vec![sphere],
+        CollisionSettings {
+            thickness: 0.01,
+            ..Default::default()
+        },
+    );
+    run_clean(&mut s, 30, 1.0 / 60.0);
+    let cap: Vec<usize> = (0..s.model.x.len())
+        .filter(|&i| s.model.x[i].x.hypot(s.model.x[i].z) > 0.05)
+        .collect();
+    assert!(cap.len() >= 4);
+    let before: Vec<f64> = cap
+        .iter()
+        .map(|&i| s.model.x[i].z.atan2(s.model.x[i].x))
+        .collect();
+    s.model.obstacles[0].collider.motion = RigidMotion {
+        velocity: Vec3::ZERO,
+        angular_velocity: Vec3::new(0.0, 1.5, 0.0),
+    };
+    run_clean(&mut s, 30, 1.0 / 60.0);
+    let turn: f64 = cap
+        .iter()
+        .zip(&before)
+        .map(|(&i, a)| {
+            (s.model.x[i].z.atan2(s.model.x[i].x) - a + std::f64::consts::PI)
+                .rem_euclid(std::f64::consts::TAU)
+                - std::f64::consts::PI
+        })
+        .sum::<f64>()
+        / cap.len() as f64;
+    // the sphere turned by 0.75 rad; dragged by friction, the sheet turns the same way by more
+    // than half of that (it slips while it spins up, and its edges barely touch)
+    assert!(turn < -0.4 && turn > -0.8, "the sheet turned by {turn} rad");
+}
+
+#[test]
+fn a_particle_moving_away_from_an_obstacle_is_not_held_by_it() {
+    let ground = Obstacle {
+        collider: Collider::fixed(Shape::Plane {
+            point: Vec3::ZERO,
+            normal: Vec3::Y,
+        }),
+        friction: 1.0,
+    };
+    let mut s = sim(
+        vec![sheet(
+            "sheet",
+            5,
+            0.2,
+            Vec3::new(0.0, 0.005, 0.0),
+            Vec3::Y,
+            Vec3::new(0.0, 2.0, 0.0),
+        )],
+        vec![ground],
+        CollisionSettings {
+            thickness: 0.01,
+            ..Default::default()
+        },
+    );
+    s.step(0.01).unwrap();
+    // thrown up at 2 m/s: after one step it rises by about 2 cm, with no adhesion
+    assert!(s.model.x.iter().all(|p| p.y > 0.02), "{:?}", s.model.x[12]);
+}
