@@ -7,6 +7,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod bench;
 mod render;
 mod run;
 mod state;
@@ -26,6 +27,8 @@ enum Command {
     Run(run::RunArgs),
     /// Draw the frames of a run folder as an animated GIF or a PNG still.
     Render(render::RenderArgs),
+    /// Time the standard benchmark scenes (hang, drape, pile) and print one table.
+    Bench(bench::BenchArgs),
     /// Load and check a scene and its meshes without simulating; print what it holds.
     Validate(validate::ValidateArgs),
 }
@@ -36,6 +39,7 @@ fn main() -> ExitCode {
         Command::Run(args) => run::run(args),
         Command::Validate(args) => validate::validate(args),
         Command::Render(args) => render::render_cmd(args),
+        Command::Bench(args) => bench::bench(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,250 @@
+//! `drapery bench`: the standard benchmark scenes, timed frame by frame.
+//!
+//! Scenes (one step per frame, dt = 1/60 s, a 1 m square cloth of 0.1 kg, stretch 1000 N/m):
+//! `hang-N` hangs from two corners; `drape-N` falls on a sphere (self-collision on);
+//! `pile-N` falls on the ground, tilted, and folds onto itself (self-collision on).
+//! Each scene is first advanced by some untimed warm-up frames (so that collision scenes are
+//! in contact), then `--frames` frames are timed, each followed by writing an OBJ frame to a
+//! temporary folder (the "output" column). A run reports the mean time per frame; the table shows
+//! the median over `--runs` runs. Peak memory is the process's peak resident set so far.
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use drapery::collision::colliders::{Collider, Shape};
+use drapery::collision::settings::{CollisionSettings, Obstacle};
+use drapery::model::{ClothDesc, MassSpec, Material, Model};
+use drapery::{Mesh, Simulation, SolverSettings, Vec3};
+use std::time::Instant;
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Scenes to run, comma-separated (e.g. hang-64,drape-64); default: all standard scenes
+    /// hang-32,hang-64,hang-128,hang-256,drape-64,drape-128,pile-64,pile-128.
+    #[arg(long, value_delimiter = ',')]
+    scenes: Vec<String>,
+    /// Timed frames per run.
+    #[arg(long, default_value_t = 10)]
+    frames: usize,
+    /// Runs per scene (the table shows the median).
+    #[arg(long, default_value_t = 3)]
+    runs: usize,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// PCG relative tolerance for every scene.
+    #[arg(long, default_value_t = 1e-3)]
+    tolerance: f64,
+}
+
+const STANDARD: &[&str] = &[
+    "hang-32",
+    "hang-64",
+    "hang-128",
+    "hang-256",
+    "drape-64",
+    "drape-128",
+    "pile-64",
+    "pile-128",
+];
+
+/// Builds a named scene; returns the simulation and its warm-up frame count.
+fn scene(name: &str, tolerance: f64) -> Result<(Simulation, usize)> {
+    let (kind, n) = name
+        .split_once('-')
+        .with_context(|| format!("scene '{name}': expected KIND-SIZE, e.g. hang-64"))?;
+    let n: usize = n
+        .parse()
+        .ok()
+        .filter(|&n| n >= 2)
+        .with_context(|| format!("scene '{name}': the size must be a whole number ≥ 2"))?;
+    let material = Material {
+        stretch_stiffness: 1000.0,
+        shear_stiffness: 100.0,
+        bend_stiffness: 1.0,
+        damping: 0.01,
+        air_drag: 0.0,
+        mass: MassSpec::Density(0.1),
+    };
+    let (center, normal, pins, obstacle, warm) = match kind {
+        "hang" => (
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::Z,
+            vec![0, (n - 1) as u32],
+            None,
+            5,
+        ),
+        "drape" => (
+            Vec3::new(0.0, 0.4, 0.0),
+            Vec3::Y,
+            vec![],
+            Some(Shape::Sphere {
+                center: Vec3::ZERO,
+                radius: 0.3,
+            }),
+            30,
+        ),
+        "pile" => (
+            Vec3::new(0.0, 0.6, 0.0),
+            Vec3::new(0.0, 0.3, 1.0),
+            vec![],
+            Some(Shape::Plane {
+                point: Vec3::ZERO,
+                normal: Vec3::Y,
+            }),
+            40,
+        ),
+        _ => bail!("scene '{name}': unknown kind '{kind}' (hang, drape or pile)"),
+    };
+    let mesh = Mesh::grid([1.0, 1.0], [n, n], center, normal)?;
+    let cloth = ClothDesc {
+        name: kind.into(),
+        mesh,
+        material,
+        pins,
+        initial_velocity: Vec3::ZERO,
+    };
+    let mut model = Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0))?;
+    if let Some(shape) = obstacle {
+        model.collision = Some(CollisionSettings {
+            thickness: 0.005,
+            self_collision: true,
+            friction: 0.3,
+            stiffness: 1000.0,
+        });
+        model.obstacles = vec![Obstacle {
+            collider: Collider::fixed(shape),
+            friction: 0.3,
+        }];
+    }
+    let settings = SolverSettings {
+        tolerance,
+        max_iterations: 20_000,
+        ..Default::default()
+    };
+    Ok((Simulation::new(model, settings)?, warm))
+}
+
+/// Peak resident set size of this process, MiB (Linux), if known.
+fn peak_rss_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
+}
+
+#[derive(Default, Clone, Copy)]
+struct RunTimes {
+    frame_ms: f64,
+    assembly_ms: f64,
+    solve_ms: f64,
+    collision_ms: f64,
+    output_ms: f64,
+    cg: f64,
+}
+
+fn run_once(name: &str, frames: usize, tolerance: f64, dir: &std::path::Path) -> Result<RunTimes> {
+    let (mut sim, warm) = scene(name, tolerance)?;
+    let h = 1.0 / 60.0;
+    for _ in 0..warm {
+        sim.step(h)
+            .with_context(|| format!("scene {name} (warm-up)"))?;
+    }
+    let mut t = RunTimes::default();
+    let path = dir.join(format!("{name}.obj"));
+    for _ in 0..frames {
+        let start = Instant::now();
+        let r = sim.step(h).with_context(|| format!("scene {name}"))?;
+        let out = Instant::now();
+        drapery::io::obj::write_obj(&path, &sim.model.cloths, &sim.model.x)?;
+        t.output_ms += out.elapsed().as_secs_f64() * 1e3;
+        t.frame_ms += start.elapsed().as_secs_f64() * 1e3;
+        t.assembly_ms += r.assembly_seconds * 1e3;
+        t.solve_ms += r.solve_seconds * 1e3;
+        t.collision_ms += r.collision_seconds * 1e3;
+        t.cg += r.cg_iterations as f64;
+    }
+    let f = frames as f64;
+    Ok(RunTimes {
+        frame_ms: t.frame_ms / f,
+        assembly_ms: t.assembly_ms / f,
+        solve_ms: t.solve_ms / f,
+        collision_ms: t.collision_ms / f,
+        output_ms: t.output_ms / f,
+        cg: t.cg / f,
+    })
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+pub fn bench(args: BenchArgs) -> Result<()> {
+    if args.frames == 0 || args.runs == 0 {
+        bail!("--frames and --runs must be at least 1");
+    }
+    if let Some(n) = args.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .context("--threads")?;
+    }
+    let scenes: Vec<String> = if args.scenes.is_empty() {
+        STANDARD.iter().map(|s| s.to_string()).collect()
+    } else {
+        args.scenes.clone()
+    };
+    for s in &scenes {
+        scene(s, args.tolerance)?; // check every name before running anything
+    }
+    let dir = std::env::temp_dir().join(format!("drapery-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).with_context(|| dir.display().to_string())?;
+    println!(
+        "drapery bench: {} timed frames x {} runs per scene, 1 step per frame (dt = 1/60 s), tolerance {:e}, {} threads",
+        args.frames,
+        args.runs,
+        args.tolerance,
+        rayon::current_num_threads()
+    );
+    println!(
+        "{:<10} {:>8} {:>10} {:>6} {:>8} {:>10} {:>9} {:>10} {:>8} {:>9}",
+        "scene",
+        "vertices",
+        "ms/frame",
+        "steps",
+        "CG/step",
+        "assembly",
+        "solve",
+        "collision",
+        "output",
+        "peak MiB"
+    );
+    let result = (|| -> Result<()> {
+        for s in &scenes {
+            let runs: Vec<RunTimes> = (0..args.runs)
+                .map(|_| run_once(s, args.frames, args.tolerance, &dir))
+                .collect::<Result<_>>()?;
+            let m = |f: fn(&RunTimes) -> f64| median(runs.iter().map(f).collect());
+            let n: usize = s
+                .split_once('-')
+                .and_then(|(_, n)| n.parse().ok())
+                .unwrap_or(0);
+            println!(
+                "{:<10} {:>8} {:>10.2} {:>6} {:>8.1} {:>10.2} {:>9.2} {:>10.2} {:>8.2} {:>9}",
+                s,
+                n * n,
+                m(|r| r.frame_ms),
+                1,
+                m(|r| r.cg),
+                m(|r| r.assembly_ms),
+                m(|r| r.solve_ms),
+                m(|r| r.collision_ms),
+                m(|r| r.output_ms),
+                peak_rss_mib().map_or("?".into(), |v| format!("{v:.0}"))
+            );
+        }
+        Ok(())
+    })();
+    let _ = std::fs::remove_dir_all(&dir);
+    result
+}
