@@ -134,9 +134,10 @@ pub fn frame_files(dir: &Path) -> Result<(BTreeMap<usize, PathBuf>, &'static str
     }
 }
 
-/// One frame file as a scene to draw.
-fn load_frame(path: &Path, ext: &str) -> Result<RenderScene> {
-    let mesh = if ext == "obj" {
+/// One frame file as one mesh (all cloths together; OBJ objects are merged, PLY polygons with
+/// more than four vertices are fanned into triangles).
+pub fn read_frame(path: &Path, ext: &str) -> Result<Mesh> {
+    Ok(if ext == "obj" {
         read_obj(path)?
     } else {
         let (positions, polys) = read_ply(path)?;
@@ -164,7 +165,12 @@ fn load_frame(path: &Path, ext: &str) -> Result<RenderScene> {
             faces,
             lines: Vec::new(),
         }
-    };
+    })
+}
+
+/// One frame file as a scene to draw.
+fn load_frame(path: &Path, ext: &str) -> Result<RenderScene> {
+    let mesh = read_frame(path, ext)?;
     let cloth = ClothInfo {
         name: "frame".into(),
         offset: 0,
