@@ -59,7 +59,12 @@ pub fn check(args: CheckArgs) -> Result<bool> {
             let (t, n_scene) = match &scene {
                 Some(s) => (
                     k as f64 / s.frame_rate,
-                    Some(s.cloths.iter().map(|c| c.mesh.vertex_count()).sum::<usize>()),
+                    Some(
+                        s.cloths
+                            .iter()
+                            .map(|c| c.mesh.vertex_count())
+                            .sum::<usize>(),
+                    ),
                 ),
                 None => (0.0, None),
             };
@@ -70,7 +75,10 @@ pub fn check(args: CheckArgs) -> Result<bool> {
                     "{}: has {} vertices but the cloths of {} have {n}: not a run of this scene",
                     path.display(),
                     mesh.vertex_count(),
-                    args.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_default()
+                    args.scene
+                        .as_ref()
+                        .map(|p| p.display().to_string())
+                        .unwrap_or_default()
                 );
             }
             let r = check_frame(

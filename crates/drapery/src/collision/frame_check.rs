@@ -73,7 +73,10 @@ mod tests {
         // a plate mesh 0.5 m above the sheet, moving down at 1 m/s
         let plate = Mesh::grid([0.5, 0.5], [2, 2], Vec3::new(0.0, 0.5, 0.0), Vec3::X).unwrap();
         let plate = Collider {
-            shape: Shape::Mesh(TriangleMesh::new(plate.positions.clone(), plate.triangles())),
+            shape: Shape::Mesh(TriangleMesh::new(
+                plate.positions.clone(),
+                plate.triangles(),
+            )),
             motion: RigidMotion {
                 velocity: Vec3::new(0.0, -1.0, 0.0),
                 angular_velocity: Vec3::ZERO,
