@@ -26,7 +26,25 @@
 //! grid = { size = [1.0, 1.0], resolution = [33, 33], center = [0.0, 1.0, 0.0], normal = [0.0, 0.0, 1.0] }
 //! density = 0.1                 # kg/m² (or vertex_mass = kg per vertex)
 //! pin = [0, 32]
+//!
+//! [collision]                   # optional; defaults shown
+//! thickness = 0.005             # m
+//! self_collision = true
+//! friction = 0.3                # Coulomb, every obstacle contact
+//! stiffness = 1000.0            # N/m, cloth–cloth repulsion
+//!
+//! [[collider]]                  # zero or more
+//! shape = "sphere"              # plane: point, normal · sphere: center, radius ·
+//! center = [0.0, 0.25, 0.0]     # capsule: a, b, radius · box: center, half_extents,
+//! radius = 0.25                 # rotation = [x, y, z, w] · mesh: mesh = "body.obj"
+//! friction = 0.5                # optional, overrides [collision].friction
+//! velocity = [0.0, 0.0, 0.0]    # optional, m/s
+//! angular_velocity = [0.0, 3.14, 0.0]  # optional, rad/s about the collider's center
 //! ```
+//!
+//! Collisions are on when the scene has a `[collision]` table or any `[[collider]]` (colliders
+//! alone use the default settings). A collider turns about its [`Collider::center`]: for a mesh
+//! that is the centroid of its vertices, not the origin of its file.
 //!
 //! Timing: the number of steps per frame is `round(1/(frame_rate·dt))` and must be whole within
 //! 1e-6 relative and at least 1; the step actually taken is `1/(frame_rate·steps_per_frame)`
