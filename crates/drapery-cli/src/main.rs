@@ -2,12 +2,14 @@
 //!
 //! `main` holds only the argument definitions and the dispatch; each subcommand lives in its own
 //! file. Errors are printed as one line, `error: <message>`, with exit code 1; clap's own usage
-//! errors keep clap's exit code 2.
+//! errors keep clap's exit code 2. `drapery check` also exits with 1 when it finds an intersection.
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod bench;
+mod check;
+mod colliders;
 mod render;
 mod run;
 mod state;
@@ -31,18 +33,23 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Load and check a scene and its meshes without simulating; print what it holds.
     Validate(validate::ValidateArgs),
+    /// Count intersections in the frames of a run: cloth through cloth and, with --scene, cloth
+    /// inside colliders. Exit code 1 when anything intersects.
+    Check(check::CheckArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run(args) => run::run(args),
-        Command::Validate(args) => validate::validate(args),
-        Command::Render(args) => render::render_cmd(args),
-        Command::Bench(args) => bench::bench(args),
+        Command::Run(args) => run::run(args).map(|()| true),
+        Command::Validate(args) => validate::validate(args).map(|()| true),
+        Command::Render(args) => render::render_cmd(args).map(|()| true),
+        Command::Bench(args) => bench::bench(args).map(|()| true),
+        Command::Check(args) => check::check(args),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(1),
         Err(e) => {
             // One line, whatever the error chain holds.
             let msg = format!("{e:#}").replace(['\n', '\r'], " ");

@@ -4,6 +4,7 @@
 //! the library's rasterizer ([`drapery::render`]) from one camera for every frame (the automatic
 //! camera framing all frames of the folder, or `--eye/--target/--fov`), and writes an animated
 //! GIF (every frame, or every `--every`-th) or one PNG (`--frame N`, default the last frame).
+//! With `--scene`, the scene's colliders are drawn too, each posed at its frame's time.
 
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
@@ -64,6 +65,10 @@ pub struct RenderArgs {
     /// Vertical field of view in degrees (with --eye; default 35).
     #[arg(long, value_name = "DEG", requires = "eye")]
     pub fov: Option<f64>,
+    /// The scene of the run: also draw its colliders (grey), posed at each frame's time
+    /// (frame k at k / frame_rate). Planes are drawn as squares under the cloth.
+    #[arg(long, value_name = "SCENE.toml")]
+    pub scene: Option<PathBuf>,
 }
 
 enum Picture {
@@ -134,9 +139,10 @@ pub fn frame_files(dir: &Path) -> Result<(BTreeMap<usize, PathBuf>, &'static str
     }
 }
 
-/// One frame file as a scene to draw.
-fn load_frame(path: &Path, ext: &str) -> Result<RenderScene> {
-    let mesh = if ext == "obj" {
+/// One frame file as one mesh (all cloths together; OBJ objects are merged, PLY polygons with
+/// more than four vertices are fanned into triangles).
+pub fn read_frame(path: &Path, ext: &str) -> Result<Mesh> {
+    Ok(if ext == "obj" {
         read_obj(path)?
     } else {
         let (positions, polys) = read_ply(path)?;
@@ -164,7 +170,12 @@ fn load_frame(path: &Path, ext: &str) -> Result<RenderScene> {
             faces,
             lines: Vec::new(),
         }
-    };
+    })
+}
+
+/// One frame file as a scene to draw.
+fn load_frame(path: &Path, ext: &str) -> Result<RenderScene> {
+    let mesh = read_frame(path, ext)?;
     let cloth = ClothInfo {
         name: "frame".into(),
         offset: 0,
@@ -209,6 +220,10 @@ pub fn render_cmd(args: RenderArgs) -> Result<()> {
         _ => None,
     };
 
+    let scene = match &args.scene {
+        Some(p) => Some(drapery::scene::Scene::load(p)?),
+        None => None,
+    };
     let (files, kind) = frame_files(&args.dir)?;
     let (first, last) = (
         *files.keys().next().unwrap_or(&0),
@@ -238,10 +253,20 @@ pub fn render_cmd(args: RenderArgs) -> Result<()> {
         .filter(|(k, _)| camera.is_none() || drawn.contains(k))
         .map(|(k, p)| (*k, p))
         .collect();
-    let scenes: Vec<RenderScene> = to_load
+    let mut scenes: Vec<RenderScene> = to_load
         .par_iter()
         .map(|(_, p)| load_frame(p, kind))
         .collect::<Result<_>>()?;
+    if let Some(sc) = &scene {
+        // Planes are sized from the cloth of the first loaded frame, the same in every picture.
+        let cloth_bounds = scenes.first().and_then(|s| s.bounds());
+        for ((k, _), s) in to_load.iter().zip(scenes.iter_mut()) {
+            let t = *k as f64 / sc.frame_rate;
+            for m in crate::colliders::collider_meshes(&sc.obstacles, t, cloth_bounds) {
+                s.add_collider(m.positions, m.triangles);
+            }
+        }
+    }
     let camera = match camera {
         Some(c) => c,
         None => auto_camera(&scenes, width, height)?,

@@ -14,7 +14,8 @@ use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, ValueEnum};
 use drapery::Model;
 use drapery::Vec3;
-use drapery::io::gltf::write_glb;
+use drapery::collision::settings::Obstacle;
+use drapery::io::gltf::{StaticMesh, write_glb_with};
 use drapery::io::obj::write_obj;
 use drapery::io::ply::write_ply;
 use drapery::io::usd::write_usda;
@@ -136,11 +137,13 @@ impl FrameWriter for PlyFrames {
     }
 }
 
-/// `DIR/<stem>.glb` or `DIR/<stem>.usda`, written once at the end from every frame.
+/// `DIR/<stem>.glb` or `DIR/<stem>.usda`, written once at the end from every frame. The glb
+/// also holds the colliders, as static meshes in their pose at frame 0.
 struct WholeRun {
     format: Format,
     path: PathBuf,
     frame_rate: f64,
+    obstacles: Vec<Obstacle>,
 }
 
 impl FrameWriter for WholeRun {
@@ -149,7 +152,21 @@ impl FrameWriter for WholeRun {
     }
     fn finish(&mut self, model: &Model, frames: &[Vec<Vec3>]) -> drapery::Result<()> {
         match self.format {
-            Format::Glb => write_glb(&self.path, &model.cloths, frames, self.frame_rate),
+            Format::Glb => {
+                let bounds = frames
+                    .first()
+                    .and_then(|x| drapery::render::bounds(x.iter()));
+                let meshes = crate::colliders::collider_meshes(&self.obstacles, 0.0, bounds);
+                let extra: Vec<StaticMesh<'_>> = meshes
+                    .iter()
+                    .map(|m| StaticMesh {
+                        name: &m.name,
+                        positions: &m.positions,
+                        triangles: &m.triangles,
+                    })
+                    .collect();
+                write_glb_with(&self.path, &model.cloths, frames, self.frame_rate, &extra)
+            }
             _ => write_usda(&self.path, &model.cloths, frames, self.frame_rate),
         }
     }
@@ -170,7 +187,13 @@ fn run_stem(scene: &Path) -> String {
 }
 
 /// The writer of one format.
-fn writer_for(format: Format, dir: &Path, stem: &str, frame_rate: f64) -> Box<dyn FrameWriter> {
+fn writer_for(
+    format: Format,
+    dir: &Path,
+    stem: &str,
+    frame_rate: f64,
+    obstacles: &[Obstacle],
+) -> Box<dyn FrameWriter> {
     let dir = dir.to_path_buf();
     match format {
         Format::Obj => Box::new(ObjFrames { dir }),
@@ -179,6 +202,7 @@ fn writer_for(format: Format, dir: &Path, stem: &str, frame_rate: f64) -> Box<dy
             format,
             path: dir.join(format!("{stem}.{}", format.extension())),
             frame_rate,
+            obstacles: obstacles.to_vec(),
         }),
     }
 }
@@ -321,7 +345,7 @@ pub fn run(args: RunArgs) -> Result<()> {
     }
     let mut writers: Vec<Box<dyn FrameWriter>> = formats
         .iter()
-        .map(|&f| writer_for(f, dir, &stem, scene.frame_rate))
+        .map(|&f| writer_for(f, dir, &stem, scene.frame_rate, &scene.obstacles))
         .collect();
     let keep_history = writers.iter().any(|w| w.whole_run());
     let (first, mut history) = match begin {
@@ -392,6 +416,17 @@ pub fn run(args: RunArgs) -> Result<()> {
         Ok(())
     };
     if first == 0 {
+        if sim.model.collision.is_some() {
+            let (pairs, inside) = sim.intersections();
+            if pairs > 0 || inside > 0 {
+                progress.suspend(|| {
+                    eprintln!(
+                        "warning: {}: the initial state already intersects ({pairs} intersecting cloth triangle pairs, {inside} vertices inside colliders); continuing without repairing it",
+                        args.scene.display()
+                    )
+                });
+            }
+        }
         emit(0, &sim, &mut history)?;
     }
     progress.set_position(first.saturating_sub(1) as u64);

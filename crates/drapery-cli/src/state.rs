@@ -16,6 +16,8 @@
 
 use anyhow::{Context, Result, bail};
 use drapery::Vec3;
+use drapery::collision::colliders::Shape;
+use drapery::collision::settings::Obstacle;
 use drapery::scene::Scene;
 use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -50,8 +52,9 @@ impl Fnv {
 }
 
 /// The fingerprint of a scene: FNV-1a 64 over the drapery version, the scene file's bytes and
-/// every cloth's mesh as loaded (name, positions to the bit, faces, line elements), so editing
-/// the scene or any mesh it uses changes it.
+/// every cloth's mesh as loaded (name, positions to the bit, faces, line elements) and, when the
+/// scene has collisions, the collision settings and every collider (mesh colliders' vertices
+/// and triangles included), so editing the scene or any mesh it uses changes it.
 pub fn fingerprint(scene: &Scene, scene_text: &[u8]) -> u64 {
     let mut h = Fnv::new();
     h.bytes(b"drapery ")
@@ -78,7 +81,75 @@ pub fn fingerprint(scene: &Scene, scene_text: &[u8]) -> u64 {
             h.u64(l[0] as u64).u64(l[1] as u64);
         }
     }
+    // Collisions (only when the scene has them, so older fingerprints stay valid): the
+    // settings and every collider as loaded, mesh collider vertices and triangles included.
+    if let Some(c) = &scene.collision {
+        h.bytes(b"collision");
+        for x in [c.thickness, c.friction, c.stiffness] {
+            h.u64(x.to_bits());
+        }
+        h.u64(c.self_collision as u64);
+        h.u64(scene.obstacles.len() as u64);
+        for o in &scene.obstacles {
+            hash_obstacle(&mut h, o);
+        }
+    }
     h.finish()
+}
+
+fn hash_obstacle(h: &mut Fnv, o: &Obstacle) {
+    let vec = |h: &mut Fnv, v: Vec3| {
+        for k in 0..3 {
+            h.u64(v[k].to_bits());
+        }
+    };
+    let c = &o.collider;
+    h.u64(o.friction.to_bits());
+    vec(h, c.motion.velocity);
+    vec(h, c.motion.angular_velocity);
+    match &c.shape {
+        Shape::Plane { point, normal } => {
+            h.bytes(b"plane");
+            vec(h, *point);
+            vec(h, *normal);
+        }
+        Shape::Sphere { center, radius } => {
+            h.bytes(b"sphere");
+            vec(h, *center);
+            h.u64(radius.to_bits());
+        }
+        Shape::Capsule { a, b, radius } => {
+            h.bytes(b"capsule");
+            vec(h, *a);
+            vec(h, *b);
+            h.u64(radius.to_bits());
+        }
+        Shape::Box {
+            center,
+            half_extents,
+            rotation,
+        } => {
+            h.bytes(b"box");
+            vec(h, *center);
+            vec(h, *half_extents);
+            for q in rotation.to_array() {
+                h.u64(q.to_bits());
+            }
+        }
+        Shape::Mesh(m) => {
+            h.bytes(b"mesh");
+            h.u64(m.vertices().len() as u64);
+            for p in m.vertices() {
+                vec(h, *p);
+            }
+            h.u64(m.triangles().len() as u64);
+            for t in m.triangles() {
+                for &i in t {
+                    h.u64(i as u64);
+                }
+            }
+        }
+    }
 }
 
 /// What `state.bin` holds.

@@ -48,7 +48,32 @@ pub fn validate(args: ValidateArgs) -> Result<()> {
             sig(mass),
         ));
     }
-    out.push_str("colliders: none\n");
+    match &model.collision {
+        None => out.push_str("collision: off\n"),
+        Some(c) => out.push_str(&format!(
+            "collision: thickness {} m, self_collision {}, friction {}, stiffness {} N/m\n",
+            c.thickness, c.self_collision, c.friction, c.stiffness
+        )),
+    }
+    if model.obstacles.is_empty() {
+        out.push_str("colliders: none\n");
+    }
+    for (i, o) in model.obstacles.iter().enumerate() {
+        out.push_str(&format!(
+            "collider[{i}]: {}\n",
+            crate::colliders::describe(o)
+        ));
+    }
+    if model.collision.is_some() {
+        let (pairs, inside) = sim.intersections();
+        if pairs == 0 && inside == 0 {
+            out.push_str("initial state: no intersection\n");
+        } else {
+            out.push_str(&format!(
+                "initial state: INTERSECTS: {pairs} intersecting cloth triangle pairs, {inside} vertices inside colliders (the run reports them and continues; they are not repaired)\n"
+            ));
+        }
+    }
     out.push_str(&format!(
         "total: {} cloths, {} vertices, {} springs, mass {} kg\n",
         model.cloths.len(),

@@ -366,10 +366,10 @@ fn unknown_field_is_named_with_its_line() {
 #[test]
 fn unknown_table_is_an_error() {
     let (c, s) = case(
-        |t| format!("{t}\n[collision]\nthickness = 0.01\n"),
+        |t| format!("{t}\n[collisions]\nthickness = 0.01\n"),
         QUAD.as_bytes(),
     );
-    c.assert_rejected(&s, &["scene.toml", "collision"]);
+    c.assert_rejected(&s, &["scene.toml", "collisions"]);
 }
 
 #[test]

@@ -26,7 +26,25 @@
 //! grid = { size = [1.0, 1.0], resolution = [33, 33], center = [0.0, 1.0, 0.0], normal = [0.0, 0.0, 1.0] }
 //! density = 0.1                 # kg/m² (or vertex_mass = kg per vertex)
 //! pin = [0, 32]
+//!
+//! [collision]                   # optional; defaults shown
+//! thickness = 0.005             # m
+//! self_collision = true
+//! friction = 0.3                # Coulomb, every obstacle contact
+//! stiffness = 1000.0            # N/m, cloth–cloth repulsion
+//!
+//! [[collider]]                  # zero or more
+//! shape = "sphere"              # plane: point, normal · sphere: center, radius ·
+//! center = [0.0, 0.25, 0.0]     # capsule: a, b, radius · box: center, half_extents,
+//! radius = 0.25                 # rotation = [x, y, z, w] · mesh: mesh = "body.obj"
+//! friction = 0.5                # optional, overrides [collision].friction
+//! velocity = [0.0, 0.0, 0.0]    # optional, m/s
+//! angular_velocity = [0.0, 3.14, 0.0]  # optional, rad/s about the collider's center
 //! ```
+//!
+//! Collisions are on when the scene has a `[collision]` table or any `[[collider]]` (colliders
+//! alone use the default settings). A collider turns about its [`Collider::center`]: for a mesh
+//! that is the centroid of its vertices, not the origin of its file.
 //!
 //! Timing: the number of steps per frame is `round(1/(frame_rate·dt))` and must be whole within
 //! 1e-6 relative and at least 1; the step actually taken is `1/(frame_rate·steps_per_frame)`
@@ -34,6 +52,8 @@
 //! `duration·frame_rate` must be a whole number of frames (within 1e-6 relative), at least 1;
 //! frames `0..=frame_count` are produced, frame 0 being the initial state.
 
+use crate::collision::colliders::{Collider, RigidMotion, Shape, TriangleMesh};
+use crate::collision::settings::{CollisionSettings, Obstacle};
 use crate::error::{Error, Result};
 use crate::integrator::{LinearSolver, Simulation, SolverSettings};
 use crate::math::Vec3;
@@ -65,6 +85,11 @@ pub struct Scene {
     pub solver: SolverSettings,
     /// The cloths, in file order.
     pub cloths: Vec<ClothDesc>,
+    /// Collision settings: `Some` when the scene has a `[collision]` table or any
+    /// `[[collider]]` (colliders without `[collision]` use [`CollisionSettings::default`]).
+    pub collision: Option<CollisionSettings>,
+    /// The `[[collider]]`s, in file order.
+    pub obstacles: Vec<Obstacle>,
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -78,6 +103,38 @@ struct SceneFile {
     solver: SolverTable,
     #[serde(default)]
     cloth: Vec<ClothTable>,
+    collision: Option<CollisionTable>,
+    #[serde(default)]
+    collider: Vec<ColliderTable>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CollisionTable {
+    thickness: Option<f64>,
+    self_collision: Option<bool>,
+    friction: Option<f64>,
+    stiffness: Option<f64>,
+}
+
+/// One `[[collider]]`: every key any shape uses; which ones are required or allowed depends on
+/// `shape` and is checked after parsing, so that messages name the collider and the shape.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ColliderTable {
+    shape: String,
+    friction: Option<f64>,
+    velocity: Option<[f64; 3]>,
+    angular_velocity: Option<[f64; 3]>,
+    point: Option<[f64; 3]>,
+    normal: Option<[f64; 3]>,
+    center: Option<[f64; 3]>,
+    radius: Option<f64>,
+    a: Option<[f64; 3]>,
+    b: Option<[f64; 3]>,
+    half_extents: Option<[f64; 3]>,
+    rotation: Option<[f64; 4]>,
+    mesh: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -371,6 +428,18 @@ impl Scene {
                 initial_velocity,
             });
         }
+        let mut collision = match &file.collision {
+            Some(t) => Some(collision_settings(t).map_err(file_err)?),
+            None => None,
+        };
+        let mut obstacles = Vec::with_capacity(file.collider.len());
+        let default_friction = collision.unwrap_or_default().friction;
+        for (i, c) in file.collider.iter().enumerate() {
+            obstacles.push(obstacle(i, c, default_friction, dir, path)?);
+        }
+        if collision.is_none() && !obstacles.is_empty() {
+            collision = Some(CollisionSettings::default());
+        }
         let scene = Scene {
             path: path.to_path_buf(),
             duration,
@@ -379,6 +448,8 @@ impl Scene {
             gravity,
             solver,
             cloths,
+            collision,
+            obstacles,
         };
         // Whatever the model itself rejects (e.g. density on vertices that belong to no face)
         // is reported now, before anything is simulated or written.
@@ -410,7 +481,10 @@ impl Scene {
 
     /// Builds the model of the scene. Model errors are reported against the scene file.
     pub fn model(&self) -> Result<Model> {
-        Model::new(self.cloths.clone(), self.gravity).map_err(|e| self.blame(e))
+        let mut m = Model::new(self.cloths.clone(), self.gravity).map_err(|e| self.blame(e))?;
+        m.collision = self.collision;
+        m.obstacles = self.obstacles.clone();
+        Ok(m)
     }
 
     /// Builds the model and the simulation, ready to step with [`Scene::step_size`].
@@ -458,6 +532,156 @@ fn solver_settings(t: &SolverTable) -> std::result::Result<SolverSettings, Strin
         linear_solver,
         damping_x_jacobian: t.damping_x_jacobian.unwrap_or(d.damping_x_jacobian),
         ..d
+    })
+}
+
+fn collision_settings(t: &CollisionTable) -> std::result::Result<CollisionSettings, String> {
+    let d = CollisionSettings::default();
+    let c = "collision.";
+    Ok(CollisionSettings {
+        thickness: positive(c, "thickness", t.thickness.unwrap_or(d.thickness))?,
+        self_collision: t.self_collision.unwrap_or(d.self_collision),
+        friction: nonneg(c, "friction", t.friction.unwrap_or(d.friction))?,
+        stiffness: positive(c, "stiffness", t.stiffness.unwrap_or(d.stiffness))?,
+    })
+}
+
+/// Shape names of `[[collider]]`.
+pub const SHAPES: [&str; 5] = ["plane", "sphere", "capsule", "box", "mesh"];
+
+/// The keys of `[[collider]]` that only some shapes use, with the shapes that use them.
+const SHAPE_KEYS: [(&str, &[&str]); 9] = [
+    ("point", &["plane"]),
+    ("normal", &["plane"]),
+    ("center", &["sphere", "box"]),
+    ("radius", &["sphere", "capsule"]),
+    ("a", &["capsule"]),
+    ("b", &["capsule"]),
+    ("half_extents", &["box"]),
+    ("rotation", &["box"]),
+    ("mesh", &["mesh"]),
+];
+
+/// One `[[collider]]` table as an obstacle; errors name the scene file, the collider and the
+/// field (mesh errors name the mesh file and its line).
+fn obstacle(
+    i: usize,
+    c: &ColliderTable,
+    default_friction: f64,
+    dir: &Path,
+    path: &Path,
+) -> Result<Obstacle> {
+    let file_err = |m: String| Error::input(path.display(), m);
+    let shape = c.shape.as_str();
+    if !SHAPES.contains(&shape) {
+        return Err(file_err(format!(
+            "collider[{i}]: unknown shape '{shape}', expected one of \"plane\", \"sphere\", \"capsule\", \"box\", \"mesh\""
+        )));
+    }
+    let what = format!("collider[{i}] ({shape}): ");
+    let present = [
+        c.point.is_some(),
+        c.normal.is_some(),
+        c.center.is_some(),
+        c.radius.is_some(),
+        c.a.is_some(),
+        c.b.is_some(),
+        c.half_extents.is_some(),
+        c.rotation.is_some(),
+        c.mesh.is_some(),
+    ];
+    for ((key, shapes), here) in SHAPE_KEYS.iter().zip(present) {
+        if here && !shapes.contains(&shape) {
+            return Err(file_err(format!(
+                "{what}`{key}` is not a key of a {shape} (it belongs to {})",
+                shapes.join(", ")
+            )));
+        }
+    }
+    let need = |key: &str| file_err(format!("{what}missing field `{key}`"));
+    let v3 = |key: &str, v: Option<[f64; 3]>| -> Result<Vec3> {
+        finite3(&what, key, v.ok_or_else(|| need(key))?).map_err(file_err)
+    };
+    let radius = || -> Result<f64> {
+        positive(&what, "radius", c.radius.ok_or_else(|| need("radius"))?).map_err(file_err)
+    };
+    let shape = match shape {
+        "plane" => {
+            let point = v3("point", c.point)?;
+            let normal = v3("normal", c.normal)?;
+            if normal.length() == 0.0 {
+                return Err(file_err(format!("{what}normal must be a non-zero vector")));
+            }
+            Shape::Plane { point, normal }
+        }
+        "sphere" => Shape::Sphere {
+            center: v3("center", c.center)?,
+            radius: radius()?,
+        },
+        "capsule" => Shape::Capsule {
+            a: v3("a", c.a)?,
+            b: v3("b", c.b)?,
+            radius: radius()?,
+        },
+        "box" => {
+            let center = v3("center", c.center)?;
+            let h = c.half_extents.ok_or_else(|| need("half_extents"))?;
+            if !h.iter().all(|&e| e > 0.0 && e.is_finite()) {
+                return Err(file_err(format!(
+                    "{what}half_extents must be three finite numbers > 0, got [{}, {}, {}]",
+                    h[0], h[1], h[2]
+                )));
+            }
+            let q = c.rotation.unwrap_or([0.0, 0.0, 0.0, 1.0]);
+            let len = q.iter().map(|e| e * e).sum::<f64>().sqrt();
+            if !(len > 0.0 && len.is_finite()) {
+                return Err(file_err(format!(
+                    "{what}rotation must be a finite non-zero quaternion [x, y, z, w], got [{}, {}, {}, {}]",
+                    q[0], q[1], q[2], q[3]
+                )));
+            }
+            Shape::Box {
+                center,
+                half_extents: Vec3::from_array(h),
+                rotation: glam::DQuat::from_xyzw(q[0] / len, q[1] / len, q[2] / len, q[3] / len),
+            }
+        }
+        _ => {
+            let name = c.mesh.as_ref().ok_or_else(|| need("mesh"))?;
+            let mesh_path = dir.join(name);
+            let mesh = crate::io::obj::read_obj(&mesh_path).map_err(|e| match e {
+                Error::Io { path: p, source } => Error::input(
+                    path.display(),
+                    format!("{what}mesh: cannot read '{p}': {source}"),
+                ),
+                other => other,
+            })?;
+            if mesh.faces.is_empty() {
+                return Err(file_err(format!(
+                    "{what}mesh '{}' has no faces (a mesh collider needs triangles or quads)",
+                    mesh_path.display()
+                )));
+            }
+            let triangles = mesh.triangles();
+            Shape::Mesh(TriangleMesh::new(mesh.positions, triangles))
+        }
+    };
+    let friction = match c.friction {
+        Some(f) => nonneg(&what, "friction", f).map_err(file_err)?,
+        None => default_friction,
+    };
+    let motion = RigidMotion {
+        velocity: finite3(&what, "velocity", c.velocity.unwrap_or([0.0; 3])).map_err(file_err)?,
+        angular_velocity: finite3(
+            &what,
+            "angular_velocity",
+            c.angular_velocity.unwrap_or([0.0; 3]),
+        )
+        .map_err(file_err)?,
+    };
+    Ok(Obstacle {
+        collider: Collider { shape, motion },
+        friction,
     })
 }
 
@@ -538,8 +762,8 @@ pin = [0, 2]
             e.starts_with("dir/s.toml: line 10") && e.contains("vertex_mas"),
             "{e}"
         );
-        let e = err(&format!("{BASE}\n[collision]\nthickness = 1\n"));
-        assert!(e.contains("collision"), "{e}");
+        let e = err(&format!("{BASE}\n[collisions]\nthickness = 1\n"));
+        assert!(e.contains("collisions"), "{e}");
         let e = err(&BASE.replace("dt = 0.01\n", ""));
         assert!(e.contains("missing field `dt`"), "{e}");
     }
@@ -620,5 +844,81 @@ pin = [0, 2]
             e.starts_with("dir/s.toml: cloth[0] 'sheet': mesh: cannot read 'dir/nope.obj'"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn collision_table_and_colliders_are_parsed() {
+        let s = load(BASE).unwrap();
+        assert!(s.collision.is_none() && s.obstacles.is_empty());
+        assert!(s.model().unwrap().collision.is_none());
+        let text = format!(
+            "{BASE}\n[collision]\nthickness = 0.01\nself_collision = false\n\n\
+             [[collider]]\nshape = \"sphere\"\ncenter = [0, 1, 0]\nradius = 0.5\nfriction = 0.5\n\
+             angular_velocity = [0, 3, 0]\n\n\
+             [[collider]]\nshape = \"box\"\ncenter = [0, 0, 0]\nhalf_extents = [1, 0.1, 1]\nrotation = [0, 0, 0, 2]\n\n\
+             [[collider]]\nshape = \"plane\"\npoint = [0, -1, 0]\nnormal = [0, 2, 0]\n\n\
+             [[collider]]\nshape = \"capsule\"\na = [0, 0, 0]\nb = [1, 0, 0]\nradius = 0.1\n"
+        );
+        let s = load(&text).unwrap();
+        let c = s.collision.unwrap();
+        assert_eq!(
+            c,
+            CollisionSettings {
+                thickness: 0.01,
+                self_collision: false,
+                ..CollisionSettings::default()
+            }
+        );
+        assert_eq!(s.obstacles.len(), 4);
+        assert_eq!(s.obstacles[0].friction, 0.5);
+        assert_eq!(s.obstacles[1].friction, 0.3);
+        assert_eq!(
+            s.obstacles[0].collider.motion.angular_velocity,
+            Vec3::new(0.0, 3.0, 0.0)
+        );
+        match &s.obstacles[1].collider.shape {
+            Shape::Box { rotation, .. } => assert_eq!(*rotation, glam::DQuat::IDENTITY),
+            other => panic!("{other:?}"),
+        }
+        let m = s.model().unwrap();
+        assert_eq!(m.obstacles.len(), 4);
+        assert!(m.collision.is_some());
+        // colliders alone turn collisions on with the defaults
+        let text = format!(
+            "{BASE}\n[[collider]]\nshape = \"plane\"\npoint = [0, -1, 0]\nnormal = [0, 1, 0]\n"
+        );
+        assert_eq!(
+            load(&text).unwrap().collision,
+            Some(CollisionSettings::default())
+        );
+    }
+
+    #[test]
+    fn bad_collision_values_are_named() {
+        let sphere = "[[collider]]\nshape = \"sphere\"\ncenter = [0, 1, 0]\nradius = 0.5\n";
+        let cases = [
+            ("[collision]\nthickness = -1\n".to_string(), "collision.thickness must be a finite number > 0, got -1"),
+            ("[collision]\nfriction = nan\n".to_string(), "collision.friction must be a finite number ≥ 0, got NaN"),
+            ("[collision]\nstiffness = 0\n".to_string(), "collision.stiffness"),
+            ("[collision]\nthicknes = 1\n".to_string(), "unknown field `thicknes`"),
+            (sphere.replace("0.5", "-0.5"), "collider[0] (sphere): radius must be a finite number > 0, got -0.5"),
+            (sphere.replace("sphere", "cone"), "collider[0]: unknown shape 'cone'"),
+            (sphere.replace("center = [0, 1, 0]\n", ""), "collider[0] (sphere): missing field `center`"),
+            (format!("{sphere}friction = -1\n"), "collider[0] (sphere): friction must be a finite number ≥ 0, got -1"),
+            (format!("{sphere}normal = [0, 1, 0]\n"), "collider[0] (sphere): `normal` is not a key of a sphere"),
+            (format!("{sphere}spin = 1\n"), "unknown field `spin`"),
+            (format!("{sphere}velocity = [0, inf, 0]\n"), "collider[0] (sphere): velocity must be finite"),
+            ("[[collider]]\nshape = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 0]\n".into(), "collider[0] (plane): normal must be a non-zero vector"),
+            ("[[collider]]\nshape = \"box\"\ncenter = [0, 0, 0]\nhalf_extents = [1, 0, 1]\n".into(), "collider[0] (box): half_extents must be three finite numbers > 0"),
+            ("[[collider]]\nshape = \"box\"\ncenter = [0, 0, 0]\nhalf_extents = [1, 1, 1]\nrotation = [0, 0, 0, 0]\n".into(), "collider[0] (box): rotation must be a finite non-zero quaternion"),
+            ("[[collider]]\nshape = \"mesh\"\nmesh = \"nope.obj\"\n".into(), "collider[0] (mesh): mesh: cannot read 'dir/nope.obj'"),
+        ];
+        for (extra, want) in cases {
+            let e = err(&format!("{BASE}\n{extra}"));
+            assert!(
+                e.starts_with("dir/s.toml: ") && e.contains(want),
+                "{e:?} lacks {want:?}"
+            );
+        }
     }
 }
