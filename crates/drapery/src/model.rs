@@ -328,17 +328,28 @@ impl Model {
             .collect()
     }
 
-    /// Every cloth edge (polygon sides and line elements), in global particle indices.
+    /// Every edge of the collision surface, in global particle indices: the sides of every
+    /// triangle of [`Model::triangles`] (so a quad's split diagonal too) and every line
+    /// element, each once.
     pub fn edges(&self) -> Vec<[u32; 2]> {
-        self.cloths
-            .iter()
-            .flat_map(|c| {
-                c.mesh
-                    .edges()
-                    .into_iter()
-                    .map(move |e| e.map(|i| i + c.offset as u32))
-            })
-            .collect()
+        let mut seen = std::collections::HashSet::new();
+        let mut out = Vec::new();
+        let tri_edges = self
+            .triangles()
+            .into_iter()
+            .flat_map(|[a, b, c]| [[a, b], [b, c], [c, a]]);
+        let lines = self.cloths.iter().flat_map(|c| {
+            c.mesh
+                .lines
+                .iter()
+                .map(move |l| l.map(|i| i + c.offset as u32))
+        });
+        for [a, b] in tri_edges.chain(lines) {
+            if seen.insert((a.min(b), a.max(b))) {
+                out.push([a, b]);
+            }
+        }
+        out
     }
 
     /// Number of particles.
