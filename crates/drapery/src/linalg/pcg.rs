@@ -21,10 +21,10 @@ pub enum Preconditioner {
     Identity,
     /// Inverse of the scalar diagonal.
     Jacobi,
-    /// Inverse of each particle's 3×3 diagonal block (default).
-    #[default]
+    /// Inverse of each particle's 3×3 diagonal block.
     BlockJacobi,
-    /// One V-cycle of smoothed-aggregation algebraic multigrid ([`super::amg`]).
+    /// One V-cycle of smoothed-aggregation algebraic multigrid ([`super::amg`]) (default).
+    #[default]
     Multigrid,
 }
 
