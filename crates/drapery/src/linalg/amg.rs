@@ -13,8 +13,9 @@
 //! * **Prolongator.** The tentative prolongator has one 3×3 identity block per (particle,
 //!   aggregate): the three translations are the near-null space. It is smoothed by one damped
 //!   Jacobi step on the filtered matrix `A^F` (weak blocks dropped and lumped into the diagonal,
-//!   so translations are kept): `P = (I - ω D_F⁻¹ A^F) P_tent`, `ω = 4 / (3 ρ̄)` with `ρ̄` a
-//!   Gershgorin bound of `ρ(D_F⁻¹ A^F)`.
+//!   so translations are kept): `P = (I - ω D_F⁻¹ A^F) P_tent`, `ω = 1.8 / ρ̄` with `ρ̄` a
+//!   Gershgorin bound of `ρ(D_F⁻¹ A^F)`
+//!   (weights: [`AmgParams`]).
 //! * **Coarse operators.** Galerkin, `A_c = Pᵀ A P`, recursively until at most
 //!   [`AmgParams::coarse_size`] particles remain; the coarsest is solved by dense Cholesky.
 //! * **Cycle** ([`cycle`]). A V-cycle with the same number of damped block-Jacobi sweeps before
@@ -46,7 +47,8 @@ pub struct AmgParams {
     pub max_levels: usize,
     /// Block-Jacobi sweeps before, and again after, the coarse correction.
     pub sweeps: usize,
-    /// Smoother damping `ω = smoother_weight / ρ̄(D⁻¹A)`.
+    /// Smoother damping `ω = smoother_weight / ρ̄(D⁻¹A)`; below 2 (`ρ̄ ≥ ρ`) so that the
+    /// cycle is positive definite.
     pub smoother_weight: f64,
     /// Prolongator damping `ω = prolongator_weight / ρ̄(D_F⁻¹A^F)`.
     pub prolongator_weight: f64,
@@ -59,8 +61,11 @@ impl Default for AmgParams {
             coarse_size: 48,
             max_levels: 12,
             sweeps: 1,
-            smoother_weight: 4.0 / 3.0,
-            prolongator_weight: 4.0 / 3.0,
+            // both damp by a Gershgorin bound, which overestimates ρ: weights above the
+            // textbook 4/3 pay off (30 → 23 iterations to 1e-3 on a hanging 64² cloth); the
+            // smoother's must stay below 2 for the cycle to be positive definite
+            smoother_weight: 1.7,
+            prolongator_weight: 1.8,
         }
     }
 }

@@ -196,8 +196,8 @@ fn galerkin(a: &BlockMatrix, t: &mut Transfer, coarse: &mut BlockMatrix) {
                 let (cols, r) = a.row(i);
                 for (&j, k) in cols.iter().zip(r) {
                     let m = a.values[k];
-                    for q in p_ptr[j as usize] as usize..p_ptr[j as usize + 1] as usize {
-                        vals[t_pos[pos] as usize - base] += m * p[q];
+                    for pq in &p[p_ptr[j as usize] as usize..p_ptr[j as usize + 1] as usize] {
+                        vals[t_pos[pos] as usize - base] += m * *pq;
                         pos += 1;
                     }
                 }

@@ -63,8 +63,8 @@ fn aggregate(a: &BlockMatrix, strong: &[f64]) -> (Vec<u32>, usize) {
         }
     }
     let first = agg.clone();
-    for i in 0..n {
-        if agg[i] != NONE {
+    for (i, g) in agg.iter_mut().enumerate() {
+        if *g != NONE {
             continue;
         }
         let best = neighbours(i).filter(|&(j, _)| first[j] != NONE).fold(
@@ -75,7 +75,7 @@ fn aggregate(a: &BlockMatrix, strong: &[f64]) -> (Vec<u32>, usize) {
             },
         );
         if let Some((j, _)) = best {
-            agg[i] = first[j];
+            *g = first[j];
         }
     }
     for i in 0..n {
