@@ -61,7 +61,7 @@ impl Default for SolverSettings {
             max_iterations: 1000,
             linear_solver: LinearSolver::Pcg,
             damping_x_jacobian: false,
-            preconditioner: Preconditioner::BlockJacobi,
+            preconditioner: Preconditioner::Multigrid,
         }
     }
 }

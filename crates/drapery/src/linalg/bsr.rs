@@ -75,6 +75,16 @@ impl BlockMatrix {
         cols.binary_search(&(j as u32)).ok().map(|k| r.start + k)
     }
 
+    /// Row offsets into `values`: row `i` is `row_ptr[i]..row_ptr[i + 1]`.
+    pub fn row_ptr(&self) -> &[u32] {
+        &self.row_ptr
+    }
+
+    /// Whether `other` has exactly the same pattern (values are not compared).
+    pub fn same_pattern(&self, other: &BlockMatrix) -> bool {
+        self.row_ptr == other.row_ptr && self.col == other.col
+    }
+
     /// Position of the diagonal block of row `i`.
     pub fn diag_index(&self, i: usize) -> usize {
         self.diag[i] as usize

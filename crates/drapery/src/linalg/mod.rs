@@ -1,7 +1,9 @@
 //! Linear algebra for the implicit step: the 3×3-block sparse matrix ([`BlockMatrix`]),
 //! deterministic vector kernels ([`vector`]), the Baraff–Witkin filtered PCG ([`pcg`]) and a
-//! sparse direct solve through faer ([`direct`]).
+//! sparse direct solve through faer ([`direct`]) and a smoothed-aggregation multigrid
+//! preconditioner ([`amg`]).
 
+pub mod amg;
 pub mod bsr;
 pub mod direct;
 pub mod pcg;

@@ -8,6 +8,7 @@
 //!
 //! Convergence is declared when `‖S (b - A x)‖ ≤ tolerance · ‖S (b - A z)‖`.
 
+use super::amg::Multigrid;
 use super::bsr::BlockMatrix;
 use super::vector::{axpy, dot};
 use crate::math::{Mat3, Vec3};
@@ -20,9 +21,11 @@ pub enum Preconditioner {
     Identity,
     /// Inverse of the scalar diagonal.
     Jacobi,
-    /// Inverse of each particle's 3×3 diagonal block (default).
-    #[default]
+    /// Inverse of each particle's 3×3 diagonal block.
     BlockJacobi,
+    /// One V-cycle of smoothed-aggregation algebraic multigrid ([`super::amg`]) (default).
+    #[default]
+    Multigrid,
 }
 
 /// Stopping rule and preconditioner.
@@ -57,6 +60,15 @@ pub struct PcgScratch {
     q: Vec<Vec3>,
     s: Vec<Vec3>,
     pinv: Vec<Mat3>,
+    amg: Multigrid,
+}
+
+impl PcgScratch {
+    /// The multigrid hierarchy (kept between solves; its structure is rebuilt when the
+    /// matrix pattern changes).
+    pub fn multigrid(&mut self) -> &mut Multigrid {
+        &mut self.amg
+    }
 }
 
 fn filter(s: &[Mat3], v: &mut [Vec3]) {
@@ -66,7 +78,16 @@ fn filter(s: &[Mat3], v: &mut [Vec3]) {
         .for_each(|(vi, si)| *vi = *si * *vi);
 }
 
-fn precondition(pinv: &[Mat3], s: &[Mat3], r: &[Vec3], out: &mut [Vec3]) {
+fn precondition(
+    amg: Option<&mut Multigrid>,
+    pinv: &[Mat3],
+    s: &[Mat3],
+    r: &[Vec3],
+    out: &mut [Vec3],
+) {
+    if let Some(amg) = amg {
+        return amg.apply(s, r, out);
+    }
     out.par_iter_mut()
         .enumerate()
         .with_min_len(1024)
@@ -88,26 +109,31 @@ pub fn solve(
     for v in [&mut w.r, &mut w.c, &mut w.q, &mut w.s] {
         v.resize(n, Vec3::ZERO);
     }
-    w.pinv.resize(n, Mat3::IDENTITY);
-    w.pinv
-        .par_iter_mut()
-        .enumerate()
-        .with_min_len(1024)
-        .for_each(|(i, p)| {
-            let d = a.values[a.diag_index(i)];
-            *p = match settings.preconditioner {
-                Preconditioner::Identity => Mat3::IDENTITY,
-                Preconditioner::Jacobi => Mat3::from_diagonal(Vec3::new(
-                    1.0 / d.x_axis.x,
-                    1.0 / d.y_axis.y,
-                    1.0 / d.z_axis.z,
-                )),
-                Preconditioner::BlockJacobi => {
-                    let inv = d.inverse();
-                    if inv.is_finite() { inv } else { Mat3::IDENTITY }
-                }
-            };
-        });
+    let multigrid = settings.preconditioner == Preconditioner::Multigrid;
+    if multigrid {
+        w.amg.refresh(a, s);
+    } else {
+        w.pinv.resize(n, Mat3::IDENTITY);
+        w.pinv
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(1024)
+            .for_each(|(i, p)| {
+                let d = a.values[a.diag_index(i)];
+                *p = match settings.preconditioner {
+                    Preconditioner::Identity | Preconditioner::Multigrid => Mat3::IDENTITY,
+                    Preconditioner::Jacobi => Mat3::from_diagonal(Vec3::new(
+                        1.0 / d.x_axis.x,
+                        1.0 / d.y_axis.y,
+                        1.0 / d.z_axis.z,
+                    )),
+                    Preconditioner::BlockJacobi => {
+                        let inv = d.inverse();
+                        if inv.is_finite() { inv } else { Mat3::IDENTITY }
+                    }
+                };
+            });
+    }
     // Reference residual: the zero guess on the free part.
     a.mul_vec(z, &mut w.q);
     for i in 0..n {
@@ -133,7 +159,7 @@ pub fn solve(
     for i in 0..n {
         w.r[i] = s[i] * (b[i] - w.q[i]);
     }
-    precondition(&w.pinv, s, &w.r, &mut w.c);
+    precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.c);
     let mut delta = dot(&w.r, &w.c);
     let target = settings.tolerance * r0;
     let mut stats = SolveStats::default();
@@ -152,7 +178,7 @@ pub fn solve(
         let alpha = delta / cq;
         axpy(alpha, &w.c, x);
         axpy(-alpha, &w.q, &mut w.r);
-        precondition(&w.pinv, s, &w.r, &mut w.s);
+        precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.s);
         let delta_new = dot(&w.r, &w.s);
         let beta = delta_new / delta;
         delta = delta_new;

@@ -1,0 +1,180 @@
+//! The V-cycle and the dense Cholesky solve of the coarsest level.
+//!
+//! On a level with matrix `A`, right-hand side `b`: `ν` damped block-Jacobi sweeps from
+//! `x = 0`, restriction of the residual `Pᵀ (b - A x)`, the cycle on the coarser level,
+//! `x += P x_c`, and `ν` sweeps again. The Jacobi sweep is self-adjoint in the `A` inner
+//! product, so the cycle is a symmetric operator; it is positive definite because the damping
+//! keeps `ω ρ(D⁻¹A) < 2`.
+
+use super::{CoarseSolver, Level, Multigrid};
+use crate::math::{Mat3, Vec3};
+use rayon::prelude::*;
+
+/// Rows per parallel task.
+const ROWS: usize = 256;
+
+/// `out = S V(r)`.
+pub(super) fn apply(mg: &mut Multigrid, s: &[Mat3], r: &[Vec3], out: &mut [Vec3]) {
+    let sweeps = mg.params.sweeps;
+    let fine = &mut mg.levels[0];
+    fine.b.copy_from_slice(r);
+    cycle(&mut mg.levels, &mg.coarse, sweeps);
+    let x = &mg.levels[0].x;
+    out.par_iter_mut()
+        .zip(x.par_iter().zip(s.par_iter()))
+        .with_min_len(1024)
+        .for_each(|(o, (xi, si))| *o = *si * *xi);
+}
+
+/// One V-cycle from `levels[0]` down: reads `levels[0].b`, writes `levels[0].x`.
+fn cycle(levels: &mut [Level], coarse: &CoarseSolver, sweeps: usize) {
+    let (lvl, rest) = levels.split_first_mut().expect("a level");
+    // moved out for the duration of the cycle so that the level's vectors can be borrowed
+    let Some(t) = lvl.transfer.take() else {
+        if let Some(l) = &coarse.l {
+            cholesky_solve(l, coarse.dim, &lvl.b, &mut lvl.x);
+        } else {
+            smooth(lvl, 2 * sweeps.max(1));
+        }
+        return;
+    };
+    let next = &mut rest[0];
+    smooth(lvl, sweeps);
+    // w = b - A x
+    let (a, x, b) = (&lvl.a, &lvl.x, &lvl.b);
+    lvl.w
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(ROWS)
+        .for_each(|(i, wi)| {
+            let (cols, r) = a.row(i);
+            let mut acc = b[i];
+            for (c, m) in cols.iter().zip(&a.values[r]) {
+                acc -= *m * x[*c as usize];
+            }
+            *wi = acc;
+        });
+    // b_c = Pᵀ w
+    let w = &lvl.w;
+    next.b
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(ROWS / 4)
+        .for_each(|(c, bc)| {
+            let mut acc = Vec3::ZERO;
+            for e in t.pt_ptr[c] as usize..t.pt_ptr[c + 1] as usize {
+                acc += t.p[t.pt_src[e] as usize].transpose() * w[t.pt_row[e] as usize];
+            }
+            *bc = acc;
+        });
+    cycle(rest, coarse, sweeps);
+    // x += P x_c
+    let xc = &rest[0].x;
+    lvl.x
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(ROWS)
+        .for_each(|(i, xi)| {
+            let r = t.p_ptr[i] as usize..t.p_ptr[i + 1] as usize;
+            for (c, m) in t.p_col[r.clone()].iter().zip(&t.p[r]) {
+                *xi += *m * xc[*c as usize];
+            }
+        });
+    lvl.transfer = Some(t);
+    smooth_more(lvl, sweeps);
+}
+
+/// `sweeps` damped block-Jacobi sweeps from `x = 0`.
+fn smooth(lvl: &mut Level, sweeps: usize) {
+    if sweeps == 0 {
+        lvl.x.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        return;
+    }
+    let (omega, dinv, b) = (lvl.omega, &lvl.dinv, &lvl.b);
+    lvl.x
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(1024)
+        .for_each(|(i, xi)| *xi = omega * (dinv[i] * b[i]));
+    smooth_more(lvl, sweeps - 1);
+}
+
+/// `sweeps` damped block-Jacobi sweeps `x ← x + ω D⁻¹ (b - A x)` from the current `x`.
+fn smooth_more(lvl: &mut Level, sweeps: usize) {
+    for _ in 0..sweeps {
+        let (a, x, b, dinv, omega) = (&lvl.a, &lvl.x, &lvl.b, &lvl.dinv, lvl.omega);
+        lvl.w
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(ROWS)
+            .for_each(|(i, wi)| {
+                let (cols, r) = a.row(i);
+                let mut acc = b[i];
+                for (c, m) in cols.iter().zip(&a.values[r]) {
+                    acc -= *m * x[*c as usize];
+                }
+                *wi = x[i] + omega * (dinv[i] * acc);
+            });
+        std::mem::swap(&mut lvl.x, &mut lvl.w);
+    }
+}
+
+/// Factors the coarsest level's matrix densely (`None` if not positive definite).
+pub(super) fn factor_coarsest(mg: &mut Multigrid) {
+    let a = &mg.levels.last().expect("a level").a;
+    let dim = 3 * a.n();
+    let mut l = vec![0.0; dim * dim];
+    for i in 0..a.n() {
+        let (cols, r) = a.row(i);
+        for (&j, m) in cols.iter().zip(&a.values[r]) {
+            for p in 0..3 {
+                for q in 0..3 {
+                    l[(3 * i + p) * dim + 3 * j as usize + q] = m.col(q)[p];
+                }
+            }
+        }
+    }
+    let ok = cholesky(&mut l, dim);
+    mg.coarse = CoarseSolver {
+        dim,
+        l: ok.then_some(l),
+    };
+}
+
+/// In-place dense Cholesky `A = L Lᵀ` on the lower triangle (row-major); false when a pivot
+/// is not positive.
+fn cholesky(a: &mut [f64], n: usize) -> bool {
+    for j in 0..n {
+        let d = a[j * n + j] - (0..j).map(|k| a[j * n + k] * a[j * n + k]).sum::<f64>();
+        if !(d > 0.0 && d.is_finite()) {
+            return false;
+        }
+        let d = d.sqrt();
+        a[j * n + j] = d;
+        for i in j + 1..n {
+            let s = a[i * n + j] - (0..j).map(|k| a[i * n + k] * a[j * n + k]).sum::<f64>();
+            a[i * n + j] = s / d;
+        }
+    }
+    true
+}
+
+/// Solves `L Lᵀ x = b`.
+fn cholesky_solve(l: &[f64], n: usize, b: &[Vec3], x: &mut [Vec3]) {
+    let mut y: Vec<f64> = b.iter().flat_map(|v| [v.x, v.y, v.z]).collect();
+    for i in 0..n {
+        let row = &l[i * n..i * n + i];
+        let s: f64 = row.iter().zip(&y[..i]).map(|(a, b)| a * b).sum();
+        y[i] = (y[i] - s) / l[i * n + i];
+    }
+    for i in (0..n).rev() {
+        let mut s = y[i];
+        for k in i + 1..n {
+            s -= l[k * n + i] * y[k];
+        }
+        y[i] = s / l[i * n + i];
+    }
+    for (i, v) in x.iter_mut().enumerate() {
+        *v = Vec3::new(y[3 * i], y[3 * i + 1], y[3 * i + 2]);
+    }
+}

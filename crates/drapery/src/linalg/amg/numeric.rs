@@ -1,0 +1,235 @@
+//! Values of the hierarchy, recomputed on every refresh over the fixed structure:
+//! the filtered fine matrix, the smoothers, the smoothed prolongators and the Galerkin
+//! coarse operators. Every loop is row-parallel with a fixed order within each row.
+
+use super::{Level, Multigrid, NONE, Transfer, WEAK, cycle, norm_inf, row_chunks, safe_inverse};
+use crate::linalg::bsr::BlockMatrix;
+use crate::math::Mat3;
+use rayon::prelude::*;
+
+/// Rows per parallel task.
+const ROWS: usize = 128;
+
+/// Recomputes every value for a new matrix of the same pattern.
+pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3]) {
+    filter_matrix(a, s, &mut mg.levels[0].a);
+    let weight = mg.params.smoother_weight;
+    let pweight = mg.params.prolongator_weight;
+    for l in 0..mg.levels.len() {
+        let (head, tail) = mg.levels.split_at_mut(l + 1);
+        let lvl = &mut head[l];
+        smoother(lvl, weight);
+        if let Some(next) = tail.first_mut() {
+            transfer(lvl, &mut next.a, pweight);
+        }
+    }
+    cycle::factor_coarsest(mg);
+}
+
+/// `out = S A S + (I - S)` block by block (`out` has the pattern of `a`).
+pub(super) fn filter_matrix(a: &BlockMatrix, s: &[Mat3], out: &mut BlockMatrix) {
+    // 0: identity, 1: zero, 2: general
+    let kind: Vec<u8> = s
+        .par_iter()
+        .with_min_len(1024)
+        .map(|m| {
+            if *m == Mat3::IDENTITY {
+                0
+            } else if *m == Mat3::ZERO {
+                1
+            } else {
+                2
+            }
+        })
+        .collect();
+    let ptr = out.row_ptr().to_vec();
+    row_chunks(&mut out.values, &ptr, ROWS)
+        .into_par_iter()
+        .for_each(|(rows, vals)| {
+            let base = ptr[rows.start] as usize;
+            for i in rows {
+                let (cols, r) = a.row(i);
+                for (&j, k) in cols.iter().zip(r) {
+                    let j = j as usize;
+                    let m = a.values[k];
+                    let mut f = match (kind[i], kind[j]) {
+                        (0, 0) => m,
+                        (1, _) | (_, 1) => Mat3::ZERO,
+                        _ => s[i] * m * s[j],
+                    };
+                    if i == j && kind[i] != 0 {
+                        f += Mat3::IDENTITY - s[i];
+                    }
+                    vals[k - base] = f;
+                }
+            }
+        });
+}
+
+/// Symmetric inverse of a diagonal block (the average of the inverse and its transpose, so
+/// that the smoother is exactly symmetric).
+fn sym_inverse(d: &Mat3) -> Mat3 {
+    let inv = safe_inverse(d);
+    0.5 * (inv + inv.transpose())
+}
+
+/// Block-Jacobi smoother of a level: `D⁻¹` and `ω = weight / ρ̄`, `ρ̄` the Gershgorin bound
+/// `max_i Σ_j ‖D_i⁻¹ A_ij‖_∞ ≥ ρ(D⁻¹ A)`.
+pub(super) fn smoother(lvl: &mut Level, weight: f64) {
+    let a = &lvl.a;
+    let bound = lvl
+        .dinv
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(ROWS)
+        .map(|(i, dinv)| {
+            *dinv = sym_inverse(&a.values[a.diag_index(i)]);
+            let (_, r) = a.row(i);
+            a.values[r]
+                .iter()
+                .map(|m| norm_inf(&(*dinv * *m)))
+                .sum::<f64>()
+        })
+        .reduce(|| 0.0, f64::max);
+    lvl.omega = if bound > 0.0 && bound.is_finite() {
+        weight / bound
+    } else {
+        1.0
+    };
+}
+
+/// Smoothed prolongator values, then `T = A P` and the coarse operator `Pᵀ T` into `coarse`.
+pub(super) fn transfer(lvl: &mut Level, coarse: &mut BlockMatrix, weight: f64) {
+    let a = &lvl.a;
+    let t = lvl.transfer.as_mut().expect("transfer");
+    let omega = prolongator(a, t, weight);
+    let Transfer {
+        p_ptr, p, p_own, ..
+    } = t;
+    row_chunks(p, p_ptr, ROWS)
+        .into_par_iter()
+        .for_each(|(rows, vals)| {
+            let base = p_ptr[rows.start] as usize;
+            for i in rows {
+                for q in p_ptr[i] as usize..p_ptr[i + 1] as usize {
+                    let mut m = -omega * vals[q - base];
+                    if q as u32 == p_own[i] {
+                        m += Mat3::IDENTITY;
+                    }
+                    vals[q - base] = m;
+                }
+            }
+        });
+    galerkin(a, t, coarse);
+}
+
+/// Fills `t.p` with `Y = D_F⁻¹ A^F P_tent` and returns `ω = weight / ρ̄(D_F⁻¹ A^F)`.
+fn prolongator(a: &BlockMatrix, t: &mut Transfer, weight: f64) -> f64 {
+    let Transfer {
+        p_ptr, p, a_slot, ..
+    } = t;
+    let chunks = row_chunks(p, p_ptr, ROWS);
+    let bound = chunks
+        .into_par_iter()
+        .map(|(rows, vals)| {
+            let base = p_ptr[rows.start] as usize;
+            let mut bound = 0.0f64;
+            for i in rows {
+                let (_, r) = a.row(i);
+                let dk = a.diag_index(i);
+                // D_F: the diagonal plus the weak blocks of the row (lumped)
+                let mut d = Mat3::ZERO;
+                for k in r.clone() {
+                    if k == dk || a_slot[k] == WEAK {
+                        d += a.values[k];
+                    }
+                }
+                let dinv = sym_inverse(&d);
+                let row = &mut vals[p_ptr[i] as usize - base..p_ptr[i + 1] as usize - base];
+                row.iter_mut().for_each(|m| *m = Mat3::ZERO);
+                let mut sum = 1.0;
+                for k in r {
+                    let slot = a_slot[k];
+                    if slot == WEAK || slot == NONE {
+                        continue;
+                    }
+                    let y = if k == dk {
+                        Mat3::IDENTITY
+                    } else {
+                        dinv * a.values[k]
+                    };
+                    if k != dk {
+                        sum += norm_inf(&y);
+                    }
+                    row[slot as usize - p_ptr[i] as usize] += y;
+                }
+                bound = bound.max(sum);
+            }
+            bound
+        })
+        .reduce(|| 0.0, f64::max);
+    if bound > 0.0 && bound.is_finite() {
+        weight / bound
+    } else {
+        0.0
+    }
+}
+
+/// `T = A P`, then `coarse = Pᵀ T`, over the precomputed positions.
+fn galerkin(a: &BlockMatrix, t: &mut Transfer, coarse: &mut BlockMatrix) {
+    let Transfer {
+        p_ptr,
+        p,
+        t_ptr,
+        t: tv,
+        t_pos_ptr,
+        t_pos,
+        ..
+    } = t;
+    row_chunks(tv, t_ptr, ROWS)
+        .into_par_iter()
+        .for_each(|(rows, vals)| {
+            let base = t_ptr[rows.start] as usize;
+            vals.iter_mut().for_each(|m| *m = Mat3::ZERO);
+            for i in rows {
+                let mut pos = t_pos_ptr[i] as usize;
+                let (cols, r) = a.row(i);
+                for (&j, k) in cols.iter().zip(r) {
+                    let m = a.values[k];
+                    for pq in &p[p_ptr[j as usize] as usize..p_ptr[j as usize + 1] as usize] {
+                        vals[t_pos[pos] as usize - base] += m * *pq;
+                        pos += 1;
+                    }
+                }
+            }
+        });
+    let ptr = coarse.row_ptr().to_vec();
+    let Transfer {
+        p,
+        pt_ptr,
+        pt_row,
+        pt_src,
+        t_ptr,
+        t: tv,
+        c_pos_ptr,
+        c_pos,
+        ..
+    } = t;
+    row_chunks(&mut coarse.values, &ptr, ROWS / 4)
+        .into_par_iter()
+        .for_each(|(rows, vals)| {
+            let base = ptr[rows.start] as usize;
+            vals.iter_mut().for_each(|m| *m = Mat3::ZERO);
+            for c in rows {
+                let mut pos = c_pos_ptr[c] as usize;
+                for e in pt_ptr[c] as usize..pt_ptr[c + 1] as usize {
+                    let i = pt_row[e] as usize;
+                    let pt = p[pt_src[e] as usize].transpose();
+                    for m in &tv[t_ptr[i] as usize..t_ptr[i + 1] as usize] {
+                        vals[c_pos[pos] as usize - base] += pt * *m;
+                        pos += 1;
+                    }
+                }
+            }
+        });
+}

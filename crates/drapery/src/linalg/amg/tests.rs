@@ -1,0 +1,227 @@
+use super::*;
+use crate::integrator::{Simulation, SolverSettings};
+use crate::linalg::direct::DirectSolver;
+use crate::linalg::pcg::{self, PcgScratch, PcgSettings, Preconditioner};
+use crate::math::outer;
+use crate::mesh::Mesh;
+use crate::model::{ClothDesc, MassSpec, Material, Model};
+
+/// The system matrix of a hanging `n × n` cloth (1 m, 0.1 kg, 1000 N/m) after `steps` steps.
+fn cloth_matrix(n: usize, steps: usize) -> BlockMatrix {
+    let mesh = Mesh::grid([1.0, 1.0], [n, n], Vec3::new(0.0, 1.0, 0.0), Vec3::Z).unwrap();
+    let material = Material {
+        stretch_stiffness: 1000.0,
+        shear_stiffness: 100.0,
+        bend_stiffness: 1.0,
+        damping: 0.01,
+        air_drag: 0.0,
+        mass: MassSpec::Density(0.1),
+    };
+    let cloth = ClothDesc {
+        name: "sheet".into(),
+        mesh,
+        material,
+        pins: vec![0, (n - 1) as u32],
+        initial_velocity: Vec3::ZERO,
+    };
+    let model = Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0)).unwrap();
+    let mut sim = Simulation::new(model, SolverSettings::default()).unwrap();
+    for _ in 0..steps {
+        sim.step(1.0 / 60.0).unwrap();
+    }
+    sim.matrix().clone()
+}
+
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+    fn vec3(&mut self) -> Vec3 {
+        Vec3::new(self.next(), self.next(), self.next())
+    }
+    fn vecs(&mut self, n: usize) -> Vec<Vec3> {
+        (0..n).map(|_| self.vec3()).collect()
+    }
+}
+
+/// Filter with the two top corners pinned and a few particles held against tilted planes.
+fn mixed_filter(n: usize, side: usize) -> Vec<Mat3> {
+    let mut s = vec![Mat3::IDENTITY; n];
+    s[0] = Mat3::ZERO;
+    s[side - 1] = Mat3::ZERO;
+    for (k, i) in [n / 2, n / 3, n - 1].into_iter().enumerate() {
+        let nrm = Vec3::new(0.3 * k as f64, 1.0, 0.5).normalize();
+        s[i] = Mat3::IDENTITY - outer(nrm, nrm);
+    }
+    s
+}
+
+fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum()
+}
+
+#[test]
+fn the_hierarchy_coarsens_a_cloth_to_a_small_dense_level() {
+    let a = cloth_matrix(64, 1);
+    let s = mixed_filter(a.n(), 64);
+    let mut mg = Multigrid::default();
+    mg.refresh(&a, &s);
+    let sizes = mg.level_sizes();
+    assert!(sizes.len() >= 3, "{sizes:?}");
+    assert!(*sizes.last().unwrap() <= mg.params.coarse_size, "{sizes:?}");
+    for w in sizes.windows(2) {
+        assert!(w[1] * 3 < w[0], "coarsening too slow: {sizes:?}");
+    }
+    assert!(
+        mg.coarse.l.is_some(),
+        "coarsest level not positive definite"
+    );
+    // the coarse operators are symmetric
+    for l in &mg.levels {
+        assert!(l.a.asymmetry() <= 1e-12 * crate::math::max_abs(&l.a.values[0]).max(1.0));
+    }
+}
+
+#[test]
+fn the_v_cycle_is_symmetric_and_positive_definite() {
+    let a = cloth_matrix(32, 3);
+    let n = a.n();
+    let s = mixed_filter(n, 32);
+    let mut mg = Multigrid::default();
+    mg.refresh(&a, &s);
+    let mut rng = Rng(5);
+    let filt = |v: Vec<Vec3>| -> Vec<Vec3> { v.iter().zip(&s).map(|(x, m)| *m * *x).collect() };
+    for _ in 0..10 {
+        let u = filt(rng.vecs(n));
+        let w = filt(rng.vecs(n));
+        let (mut pu, mut pw) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+        mg.apply(&s, &u, &mut pu);
+        mg.apply(&s, &w, &mut pw);
+        let (wpu, upw) = (dot(&w, &pu), dot(&u, &pw));
+        let scale = dot(&u, &pu).abs().max(dot(&w, &pw).abs());
+        assert!((wpu - upw).abs() <= 1e-10 * scale, "{wpu} vs {upw}");
+        assert!(dot(&u, &pu) > 0.0 && dot(&w, &pw) > 0.0);
+    }
+}
+
+#[test]
+fn refreshing_the_values_equals_building_afresh() {
+    let a1 = cloth_matrix(24, 1);
+    let a2 = cloth_matrix(24, 6);
+    let s = mixed_filter(a1.n(), 24);
+    let mut reused = Multigrid::default();
+    reused.refresh(&a1, &s);
+    reused.refresh(&a2, &s);
+    assert!(reused.times.structure == 0.0);
+    let mut fresh = Multigrid::default();
+    fresh.refresh(&a2, &s);
+    // same structure only if the aggregation agrees; compare the results of a cycle instead
+    // when it does, and otherwise just require both to be valid preconditioners
+    let r: Vec<Vec3> = Rng(9).vecs(a1.n());
+    let r: Vec<Vec3> = r.iter().zip(&s).map(|(x, m)| *m * *x).collect();
+    let (mut x1, mut x2) = (vec![Vec3::ZERO; a1.n()], vec![Vec3::ZERO; a1.n()]);
+    reused.apply(&s, &r, &mut x1);
+    fresh.apply(&s, &r, &mut x2);
+    if reused.level_sizes() == fresh.level_sizes()
+        && reused.levels[0].transfer.as_ref().map(|t| &t.agg)
+            == fresh.levels[0].transfer.as_ref().map(|t| &t.agg)
+    {
+        for (p, q) in x1.iter().zip(&x2) {
+            assert!((*p - *q).length() <= 1e-12 * q.length().max(1e-300));
+        }
+    }
+    assert!(dot(&r, &x1) > 0.0 && dot(&r, &x2) > 0.0);
+}
+
+fn solve(
+    a: &BlockMatrix,
+    b: &[Vec3],
+    s: &[Mat3],
+    z: &[Vec3],
+    p: Preconditioner,
+    tol: f64,
+) -> (Vec<Vec3>, pcg::SolveStats) {
+    let mut x = vec![Vec3::ZERO; a.n()];
+    let settings = PcgSettings {
+        tolerance: tol,
+        max_iterations: 20000,
+        preconditioner: p,
+    };
+    let st = pcg::solve(a, b, s, z, &mut x, &settings, &mut PcgScratch::default());
+    (x, st)
+}
+
+#[test]
+fn multigrid_pcg_agrees_with_the_direct_solve_on_a_filtered_cloth_system() {
+    let a = cloth_matrix(24, 5);
+    let n = a.n();
+    let s = mixed_filter(n, 24);
+    let mut rng = Rng(3);
+    let b = rng.vecs(n);
+    let z: Vec<Vec3> = (0..n)
+        .map(|i| (Mat3::IDENTITY - s[i]) * rng.vec3())
+        .collect();
+    let (x, st) = solve(&a, &b, &s, &z, Preconditioner::Multigrid, 1e-12);
+    assert!(st.converged, "{st:?}");
+    let mut xd = vec![Vec3::ZERO; n];
+    DirectSolver::default()
+        .solve(&a, &b, &s, &z, &mut xd, true)
+        .unwrap();
+    let scale = xd.iter().fold(0.0f64, |m, v| m.max(v.length()));
+    for i in 0..n {
+        assert!((x[i] - xd[i]).length() <= 1e-8 * scale, "particle {i}");
+        // the constrained part is exactly the prescribed one
+        let c = Mat3::IDENTITY - s[i];
+        assert!((c * x[i] - c * z[i]).length() <= 1e-14 * scale.max(1.0));
+    }
+}
+
+#[test]
+fn multigrid_takes_far_fewer_iterations_than_block_jacobi_on_a_64x64_cloth() {
+    let a = cloth_matrix(64, 1);
+    let n = a.n();
+    let s = mixed_filter(n, 64);
+    let b = Rng(11).vecs(n);
+    let z = vec![Vec3::ZERO; n];
+    let (xj, jac) = solve(&a, &b, &s, &z, Preconditioner::BlockJacobi, 1e-8);
+    let (xm, mg) = solve(&a, &b, &s, &z, Preconditioner::Multigrid, 1e-8);
+    assert!(jac.converged && mg.converged);
+    assert!(
+        mg.iterations * 10 <= jac.iterations,
+        "multigrid {} vs block Jacobi {}",
+        mg.iterations,
+        jac.iterations
+    );
+    let scale = xj.iter().fold(0.0f64, |m, v| m.max(v.length()));
+    for i in 0..n {
+        assert!((xj[i] - xm[i]).length() <= 1e-5 * scale);
+    }
+}
+
+#[test]
+fn multigrid_pcg_gives_the_same_bits_on_one_and_two_threads() {
+    let a = cloth_matrix(48, 2);
+    let n = a.n();
+    let s = mixed_filter(n, 48);
+    let b = Rng(17).vecs(n);
+    let z = vec![Vec3::ZERO; n];
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let (x, st) = solve(&a, &b, &s, &z, Preconditioner::Multigrid, 1e-10);
+                assert!(st.converged);
+                x.iter()
+                    .flat_map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
+                    .collect::<Vec<u64>>()
+            })
+    };
+    assert_eq!(run(1), run(2));
+}
