@@ -229,7 +229,10 @@ fn two_sheets_land_one_on_the_other() {
         for q in lower {
             if (*q - c).length() - 0.25 < 0.02 && (*p - *q).length() < 0.015 {
                 overlapping += 1;
-                assert!((*p - c).length() > (*q - c).length(), "upper {p} is under lower {q}");
+                assert!(
+                    (*p - c).length() > (*q - c).length(),
+                    "upper {p} is under lower {q}"
+                );
             }
         }
     }

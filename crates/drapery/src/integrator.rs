@@ -535,6 +535,7 @@ impl Simulation {
                 x[i] += h * ct.normal * ct.normal.dot(solved[i] - v[i]);
             }
             let before = x.clone();
+            let mut projected = Vec::new();
             match response::failsafe(
                 &x0,
                 &mut x,
@@ -547,14 +548,21 @@ impl Simulation {
                 c.thickness,
                 c.self_collision,
             ) {
-                Ok(r) => report.ccd_hits = r.ccd_hits,
+                Ok(r) => {
+                    report.ccd_hits = r.ccd_hits;
+                    projected = r.projected;
+                }
                 Err(e) => {
                     self.restore(x0, v0);
                     return Err(self.fail(e));
                 }
             }
+            let mut keep_velocity = vec![false; n];
+            projected
+                .iter()
+                .for_each(|&p| keep_velocity[p as usize] = true);
             for i in 0..n {
-                if x[i] != before[i] {
+                if x[i] != before[i] && !keep_velocity[i] {
                     v[i] = (x[i] - x0[i]) / h;
                 }
             }

@@ -133,7 +133,7 @@ pub fn apply_friction(v: &mut [Vec3], mass: &[f64], contacts: &[ObstacleContact]
 }
 
 /// What the fail-safe did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct FailsafeReport {
     /// Particles stopped by an analytic obstacle.
     pub obstacle_stops: usize,
@@ -141,6 +141,10 @@ pub struct FailsafeReport {
     pub ccd_hits: usize,
     /// CCD rounds run.
     pub rounds: usize,
+    /// Particles that started within a tenth of the thickness of (or inside) an analytic
+    /// obstacle and were only projected out at the end of the step: their displacement is a
+    /// position correction, not a velocity.
+    pub projected: Vec<u32>,
 }
 
 /// Rounds of pull-back before vertices go all the way back to their start.
@@ -196,7 +200,7 @@ pub fn failsafe(
         .filter(|o| !matches!(o.collider.shape, Shape::Mesh(_)))
         .collect();
     if !analytic.is_empty() {
-        let moved: Vec<Option<Vec3>> = (0..n)
+        let moved: Vec<Option<(Vec3, bool)>> = (0..n)
             .into_par_iter()
             .with_min_len(128)
             .map(|i| {
@@ -205,6 +209,7 @@ pub fn failsafe(
                 }
                 let mut end = x1[i];
                 let mut changed = false;
+                let mut projected = false;
                 for o in &analytic {
                     if o.collider.closest(x0[i], t0).signed_distance < stop {
                         // started (too) close: only make sure it ends outside
@@ -212,6 +217,7 @@ pub fn failsafe(
                         if c.signed_distance < stop {
                             end = c.point + c.normal * stop;
                             changed = true;
+                            projected = true;
                         }
                     } else if let Some(s) = sweep(o, x0[i], end, t0, h, stop) {
                         let hit = x0[i] + s * (end - x0[i]);
@@ -219,13 +225,16 @@ pub fn failsafe(
                         changed = true;
                     }
                 }
-                changed.then_some(end)
+                changed.then_some((end, projected))
             })
             .collect();
         for (i, m) in moved.into_iter().enumerate() {
-            if let Some(p) = m {
+            if let Some((p, projected)) = m {
                 x1[i] = p;
                 report.obstacle_stops += 1;
+                if projected {
+                    report.projected.push(i as u32);
+                }
             }
         }
     }

@@ -299,3 +299,40 @@ fn a_particle_moving_away_from_an_obstacle_is_not_held_by_it() {
     // thrown up at 2 m/s: after one step it rises by about 2 cm, with no adhesion
     assert!(s.model.x.iter().all(|p| p.y > 0.02), "{:?}", s.model.x[12]);
 }
+
+#[test]
+fn a_sheet_starting_deep_inside_a_sphere_is_pushed_out_without_blowing_up() {
+    let sphere = Obstacle {
+        collider: Collider::fixed(Shape::Sphere {
+            center: Vec3::new(0.0, 0.4, 0.0),
+            radius: 0.3,
+        }),
+        friction: 0.3,
+    };
+    let mut s = sim(
+        vec![sheet(
+            "sheet",
+            5,
+            0.4,
+            Vec3::new(0.0, 0.5, 0.0),
+            Vec3::Y,
+            Vec3::ZERO,
+        )],
+        vec![sphere],
+        CollisionSettings {
+            thickness: 0.01,
+            ..Default::default()
+        },
+    );
+    let (_, inside) = s.intersections();
+    assert!(inside > 0, "the test needs a starting penetration");
+    for _ in 0..30 {
+        s.step(0.01).unwrap();
+    }
+    assert_eq!(
+        count_penetrations(&s.model.x, &colliders(&s), s.time, 0.0),
+        0
+    );
+    // pushed out, not launched: nothing moves faster than a few m/s
+    assert!(s.model.v.iter().all(|v| v.length() < 3.0));
+}
