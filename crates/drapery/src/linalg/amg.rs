@@ -23,7 +23,10 @@
 //!   stays valid.
 //!
 //! The structure (aggregates, patterns of `P`, `A P` and `A_c`, and the position of every
-//! product term) is built once per matrix pattern, from the values at that time; every call to
+//! product term) is built once per matrix pattern. With the default strength threshold 0 it
+//! depends on the pattern and the pins only, not on the values at the time it is built, so a
+//! run resumed from a saved state rebuilds exactly the hierarchy the uninterrupted run had and
+//! ends with the same bits; every call to
 //! [`Multigrid::refresh`] then only recomputes values ([`numeric`]). All loops are row-parallel
 //! with a fixed order within a row, and the only reduction is a maximum, so the result is the
 //! same bits on any number of threads.
@@ -57,7 +60,7 @@ pub struct AmgParams {
 impl Default for AmgParams {
     fn default() -> Self {
         AmgParams {
-            strength: 0.08,
+            strength: 0.0,
             coarse_size: 48,
             max_levels: 12,
             sweeps: 1,

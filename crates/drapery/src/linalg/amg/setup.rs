@@ -11,7 +11,9 @@ fn frobenius(m: &Mat3) -> f64 {
 }
 
 /// Per block of `a`, its strength `‖A_ij‖ / √(‖A_ii‖ ‖A_jj‖)` if at least `theta`, else 0
-/// (the diagonal gets 0 too).
+/// (the diagonal gets 0 too). With `theta = 0`, every non-zero off-diagonal block has strength
+/// 1: the structure then depends only on the pattern and on which blocks are exactly zero
+/// (the rows of pinned particles), not on the values at the time it is built.
 fn strength(a: &BlockMatrix, theta: f64) -> Vec<f64> {
     let n = a.n();
     let dn: Vec<f64> = (0..n)
@@ -27,7 +29,12 @@ fn strength(a: &BlockMatrix, theta: f64) -> Vec<f64> {
             }
             let scale = (dn[i] * dn[j]).sqrt();
             let ratio = frobenius(&a.values[k]) / scale;
-            if scale > 0.0 && ratio >= theta && ratio.is_finite() {
+            if theta == 0.0 {
+                // structural mode: every non-zero block is strong, with equal weight
+                if scale > 0.0 && ratio > 0.0 && ratio.is_finite() {
+                    out[k] = 1.0;
+                }
+            } else if scale > 0.0 && ratio >= theta && ratio.is_finite() {
                 out[k] = ratio;
             }
         }
