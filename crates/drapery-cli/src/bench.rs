@@ -48,15 +48,22 @@ const STANDARD: &[&str] = &[
 ];
 
 /// Builds a named scene; returns the simulation and its warm-up frame count.
-fn scene(name: &str, tolerance: f64) -> Result<(Simulation, usize)> {
-    let (kind, n) = name
-        .split_once('-')
-        .with_context(|| format!("scene '{name}': expected KIND-SIZE, e.g. hang-64"))?;
+/// Splits and checks a scene name `KIND-SIZE`.
+fn parse(name: &str) -> Result<(&str, usize)> {
+    let (kind, n) = name.split_once('-').with_context(|| format!("scene '{name}': expected KIND-SIZE, e.g. hang-64"))?;
     let n: usize = n
         .parse()
         .ok()
-        .filter(|&n| n >= 2)
-        .with_context(|| format!("scene '{name}': the size must be a whole number ≥ 2"))?;
+        .filter(|&n| (2..=2048).contains(&n))
+        .with_context(|| format!("scene '{name}': the size must be a whole number from 2 to 2048"))?;
+    if !matches!(kind, "hang" | "drape" | "pile") {
+        bail!("scene '{name}': unknown kind '{kind}' (hang, drape or pile)");
+    }
+    Ok((kind, n))
+}
+
+fn scene(name: &str, tolerance: f64) -> Result<(Simulation, usize)> {
+    let (kind, n) = parse(name)?;
     let material = Material {
         stretch_stiffness: 1000.0,
         shear_stiffness: 100.0,
@@ -195,7 +202,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         args.scenes.clone()
     };
     for s in &scenes {
-        scene(s, args.tolerance)?; // check every name before running anything
+        parse(s)?; // check every name before running anything
     }
     let dir = std::env::temp_dir().join(format!("drapery-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).with_context(|| dir.display().to_string())?;

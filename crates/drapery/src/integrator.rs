@@ -535,7 +535,7 @@ impl Simulation {
                 x[i] += h * ct.normal * ct.normal.dot(solved[i] - v[i]);
             }
             let before = x.clone();
-            let mut projected = Vec::new();
+            let projected;
             match response::failsafe(
                 &x0,
                 &mut x,
