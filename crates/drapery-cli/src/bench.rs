@@ -50,12 +50,16 @@ const STANDARD: &[&str] = &[
 /// Builds a named scene; returns the simulation and its warm-up frame count.
 /// Splits and checks a scene name `KIND-SIZE`.
 fn parse(name: &str) -> Result<(&str, usize)> {
-    let (kind, n) = name.split_once('-').with_context(|| format!("scene '{name}': expected KIND-SIZE, e.g. hang-64"))?;
+    let (kind, n) = name
+        .split_once('-')
+        .with_context(|| format!("scene '{name}': expected KIND-SIZE, e.g. hang-64"))?;
     let n: usize = n
         .parse()
         .ok()
         .filter(|&n| (2..=2048).contains(&n))
-        .with_context(|| format!("scene '{name}': the size must be a whole number from 2 to 2048"))?;
+        .with_context(|| {
+            format!("scene '{name}': the size must be a whole number from 2 to 2048")
+        })?;
     if !matches!(kind, "hang" | "drape" | "pile") {
         bail!("scene '{name}': unknown kind '{kind}' (hang, drape or pile)");
     }

@@ -454,16 +454,18 @@ impl Simulation {
                             .dot(r[c.particle as usize] - rhs[c.particle as usize])
                     })
                     .collect();
+                // The last round keeps the contact set its solve used, so the contact list
+                // below (normal reset, friction) matches the velocities it comes with.
                 let scale = impulse.iter().fold(0.0f64, |m, l| m.max(l.abs()));
-                let before = contacts.len();
-                let keep: Vec<bool> = impulse.iter().map(|&l| l >= -1e-9 * scale).collect();
-                let mut k = keep.iter();
-                contacts.retain(|_| *k.next().unwrap_or(&true));
-                let mut k = keep.iter();
-                impulse.retain(|_| *k.next().unwrap_or(&true));
-                if contacts.len() == before || round == 3 {
+                if round == 3 || impulse.iter().all(|&l| l >= -1e-9 * scale) {
                     break;
                 }
+                (contacts, impulse) = contacts
+                    .iter()
+                    .zip(&impulse)
+                    .filter(|&(_, &l)| l >= -1e-9 * scale)
+                    .map(|(c, &l)| (*c, l))
+                    .unzip();
             }
             report.solve_seconds += t1.elapsed().as_secs_f64();
             report.newton_iterations = it + 1;
@@ -535,8 +537,7 @@ impl Simulation {
                 x[i] += h * ct.normal * ct.normal.dot(solved[i] - v[i]);
             }
             let before = x.clone();
-            let projected;
-            match response::failsafe(
+            let projected = match response::failsafe(
                 &x0,
                 &mut x,
                 &self.model.pinned,
@@ -550,13 +551,13 @@ impl Simulation {
             ) {
                 Ok(r) => {
                     report.ccd_hits = r.ccd_hits;
-                    projected = r.projected;
+                    r.projected
                 }
                 Err(e) => {
                     self.restore(x0, v0);
                     return Err(self.fail(e));
                 }
-            }
+            };
             let mut keep_velocity = vec![false; n];
             projected
                 .iter()
