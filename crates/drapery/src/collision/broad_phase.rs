@@ -119,6 +119,7 @@ pub fn candidates(
 
 /// The swept boxes of a mesh over one step and their spatial hashes (see the module docs).
 pub struct SweptBoxes<'a> {
+    half_margin: f64,
     triangles: &'a [[u32; 3]],
     edges: &'a [[u32; 2]],
     vboxes: Vec<Aabb>,
@@ -160,6 +161,7 @@ impl<'a> SweptBoxes<'a> {
             .collect();
         let (tgrid, egrid) = rayon::join(|| Grid::build(&tboxes), || Grid::build(&eboxes));
         SweptBoxes {
+            half_margin: r,
             triangles,
             edges,
             vboxes,
@@ -189,48 +191,89 @@ impl<'a> SweptBoxes<'a> {
         map_pairs(self.eboxes.len(), |a, out| self.edges_near(a, out), f)
     }
 
-    /// The candidates (as [`candidates`] would list them) that involve at least one vertex `i`
-    /// with `moved[i]` (`moved.len()` = the vertex count).
-    pub fn touching(&self, moved: &[bool]) -> Candidates {
-        let hit = |idx: &[u32]| idx.iter().any(|&i| moved[i as usize]);
-        let mut vt: Vec<(u32, u32)> = Vec::new();
-        let mut scratch = Vec::new();
-        for v in (0..self.vboxes.len() as u32).filter(|&v| moved[v as usize]) {
-            self.triangles_near(v, &mut scratch);
-            vt.extend(scratch.iter().map(|&t| (v, t)));
+    /// The candidates of the motion `x0 → x1` (as [`candidates`] would list them) that involve
+    /// at least one vertex `i` with `moved[i]` (`moved.len()` = the vertex count). Every vertex's
+    /// path must stay inside its swept box of [`SweptBoxes::new`] (as when vertices are moved
+    /// back along their paths): the hashes of the first motion find the pairs, and the current
+    /// boxes decide.
+    pub fn touching(&self, moved: &[bool], x0: &[Vec3], x1: &[Vec3]) -> Candidates {
+        let swept = |idx: &[u32]| {
+            Aabb::of_points(idx.iter().flat_map(|&i| [x0[i as usize], x1[i as usize]]))
+                .inflated(self.half_margin)
+        };
+        let dirty = |idx: &[u32]| idx.iter().any(|&i| moved[i as usize]);
+        let tri = |t: u32| self.triangles[t as usize];
+        let edge = |e: u32| self.edges[e as usize];
+        // `f(item, current box, out)` lists its pairs into `out`, for each item in parallel
+        fn pairs<F>(items: Vec<u32>, f: F) -> Vec<(u32, u32)>
+        where
+            F: Fn(u32, &mut Vec<u32>, &mut Vec<(u32, u32)>) + Sync + Send,
+        {
+            let mut out: Vec<(u32, u32)> = items
+                .into_par_iter()
+                .fold(
+                    || (Vec::new(), Vec::new()),
+                    |(mut scratch, mut out), i| {
+                        f(i, &mut scratch, &mut out);
+                        (scratch, out)
+                    },
+                )
+                .map(|(_, out)| out)
+                .flatten_iter()
+                .collect();
+            out.par_sort_unstable();
+            out.dedup();
+            out
         }
-        let dirty_tris: Vec<u32> = (0..self.triangles.len() as u32)
-            .filter(|&t| hit(&self.triangles[t as usize]))
+        let moved_vertices: Vec<u32> = (0..self.vboxes.len() as u32)
+            .filter(|&v| moved[v as usize])
             .collect();
-        if !dirty_tris.is_empty() {
-            let vgrid = self.vgrid.get_or_init(|| Grid::build(&self.vboxes));
-            for t in dirty_tris {
-                let tri = self.triangles[t as usize];
-                vgrid.query(&self.tboxes[t as usize], &self.vboxes, None, &mut scratch);
-                vt.extend(
-                    scratch
-                        .iter()
-                        .filter(|&&v| !tri.contains(&v))
-                        .map(|&v| (v, t)),
-                );
-            }
-        }
-        vt.sort_unstable();
-        vt.dedup();
-        let mut ee: Vec<(u32, u32)> = Vec::new();
-        for a in (0..self.edges.len() as u32).filter(|&a| hit(&self.edges[a as usize])) {
-            self.egrid
-                .query(&self.eboxes[a as usize], &self.eboxes, None, &mut scratch);
-            let ea = self.edges[a as usize];
-            ee.extend(
+        let dirty_triangles: Vec<u32> = (0..self.triangles.len() as u32)
+            .into_par_iter()
+            .filter(|&t| dirty(&tri(t)))
+            .collect();
+        let dirty_edges: Vec<u32> = (0..self.edges.len() as u32)
+            .into_par_iter()
+            .filter(|&e| dirty(&edge(e)))
+            .collect();
+        let vgrid = (!dirty_triangles.is_empty())
+            .then(|| self.vgrid.get_or_init(|| Grid::build(&self.vboxes)));
+        let mut vt = pairs(moved_vertices, |v, scratch, out| {
+            let b = swept(&[v]);
+            self.tgrid.query(&b, &self.tboxes, None, scratch);
+            out.extend(
                 scratch
                     .iter()
-                    .filter(|&&b| b != a && !shares_vertex(ea, self.edges[b as usize]))
-                    .map(|&b| (a.min(b), a.max(b))),
+                    .filter(|&&t| !tri(t).contains(&v) && b.overlaps(&swept(&tri(t))))
+                    .map(|&t| (v, t)),
             );
+        });
+        if let Some(vgrid) = vgrid {
+            vt.extend(pairs(dirty_triangles, |t, scratch, out| {
+                let b = swept(&tri(t));
+                vgrid.query(&b, &self.vboxes, None, scratch);
+                out.extend(
+                    scratch
+                        .iter()
+                        .filter(|&&v| !tri(t).contains(&v) && b.overlaps(&swept(&[v])))
+                        .map(|&v| (v, t)),
+                );
+            }));
+            vt.par_sort_unstable();
+            vt.dedup();
         }
-        ee.sort_unstable();
-        ee.dedup();
+        let ee = pairs(dirty_edges, |a, scratch, out| {
+            let b = swept(&edge(a));
+            self.egrid.query(&b, &self.eboxes, None, scratch);
+            out.extend(
+                scratch
+                    .iter()
+                    .filter(|&&f| {
+                        f != a && !shares_vertex(edge(a), edge(f)) && b.overlaps(&swept(&edge(f)))
+                    })
+                    .map(|&f| (a.min(f), a.max(f))),
+            );
+        });
         Candidates { vt, ee }
     }
 
@@ -638,7 +681,8 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(20))]
 
-        /// `touching` lists exactly the candidates that involve a marked vertex.
+        /// After marked vertices moved back along their paths, `touching` lists exactly the
+        /// candidates of the new motion that involve a marked vertex.
         #[test]
         fn touching_is_the_candidates_of_the_marked_vertices(
             seed in any::<u64>(), n in 3usize..14, motion in 0.0..0.05f64,
@@ -649,8 +693,14 @@ mod tests {
             for m in &marks {
                 moved[m.index(x0.len())] = true;
             }
-            let all = candidates(&x0, &x1, &tris, &edges, 0.03);
-            let got = SweptBoxes::new(&x0, &x1, &tris, &edges, 0.03).touching(&moved);
+            // the marked vertices moved back part of the way along their paths
+            let mut back = x1.clone();
+            for (i, m) in marks.iter().enumerate() {
+                let v = m.index(x0.len());
+                back[v] = x0[v].lerp(x1[v], (i % 3) as f64 * 0.4);
+            }
+            let all = candidates(&x0, &back, &tris, &edges, 0.03);
+            let got = SweptBoxes::new(&x0, &x1, &tris, &edges, 0.03).touching(&moved, &x0, &back);
             let on = |ids: &[u32]| ids.iter().any(|&i| moved[i as usize]);
             let tri = |v: u32, t: u32| { let t = tris[t as usize]; [v, t[0], t[1], t[2]] };
             let edge = |a: u32, b: u32| { let (a, b) = (edges[a as usize], edges[b as usize]); [a[0], a[1], b[0], b[1]] };

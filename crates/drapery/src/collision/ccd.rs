@@ -194,9 +194,46 @@ fn eval(c: &[f64; 4], t: f64) -> f64 {
     ((c[3] * t + c[2]) * t + c[1]) * t + c[0]
 }
 
+/// A list of at most `N` times on the stack (the queries run millions of times per step: no
+/// heap allocation).
+#[derive(Clone, Copy)]
+struct Times<const N: usize> {
+    len: usize,
+    t: [f64; N],
+}
+
+impl<const N: usize> Times<N> {
+    fn new() -> Self {
+        Times {
+            len: 0,
+            t: [0.0; N],
+        }
+    }
+    fn push(&mut self, t: f64) {
+        self.t[self.len] = t;
+        self.len += 1;
+    }
+    fn retain(&mut self, keep: impl Fn(f64) -> bool) {
+        let mut n = 0;
+        for i in 0..self.len {
+            if keep(self.t[i]) {
+                self.t[n] = self.t[i];
+                n += 1;
+            }
+        }
+        self.len = n;
+    }
+    fn as_slice(&self) -> &[f64] {
+        &self.t[..self.len]
+    }
+    fn sort(&mut self) {
+        self.t[..self.len].sort_by(f64::total_cmp);
+    }
+}
+
 /// Real roots of `a t² + b t + c` strictly inside `(0, 1)`, computed without cancellation.
-fn quadratic_roots_in_unit(a: f64, b: f64, c: f64) -> Vec<f64> {
-    let mut r = Vec::with_capacity(2);
+fn quadratic_roots_in_unit(a: f64, b: f64, c: f64) -> Times<2> {
+    let mut r = Times::new();
     let scale = a.abs().max(b.abs()).max(c.abs());
     if scale == 0.0 {
         return r;
@@ -219,8 +256,8 @@ fn quadratic_roots_in_unit(a: f64, b: f64, c: f64) -> Vec<f64> {
             r.push(-b / (2.0 * a)); // touching double root lost to rounding
         }
     }
-    r.retain(|t| *t > 0.0 && *t < 1.0);
-    r.sort_by(f64::total_cmp);
+    r.retain(|t| t > 0.0 && t < 1.0);
+    r.sort();
     r
 }
 
@@ -286,20 +323,29 @@ fn toi(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> Option<f64> {
     if degenerate {
         return advance(kind, x0, x1, tol, 0.0);
     }
-    let mut breaks = vec![0.0];
-    breaks.extend(quadratic_roots_in_unit(3.0 * c[3], 2.0 * c[2], c[1]));
+    let mut breaks = Times::<4>::new();
+    breaks.push(0.0);
+    for &t in quadratic_roots_in_unit(3.0 * c[3], 2.0 * c[2], c[1]).as_slice() {
+        breaks.push(t);
+    }
     breaks.push(1.0);
+    let breaks = breaks.as_slice();
     // |f| = |e₁ × e₂| × (distance between the parallel planes through e₁ and e₂, one of which
     // contains the other primitive's point) ≤ |e₁||e₂| × that distance. |f| is extremal at the
     // breakpoints, so a breakpoint with |f| ≤ `graze` is a possible grazing contact (touching
     // the plane without crossing), and |f| ≤ `graze` at every breakpoint means the motion stays
     // coplanar within the tolerance throughout: then only the distance itself can tell.
     let graze = eps_f.max(len[0] * len[1] * tol);
-    let values: Vec<f64> = breaks.iter().map(|&t| eval(&c, t)).collect();
+    let mut values = [0.0; 4];
+    for (v, &t) in values.iter_mut().zip(breaks) {
+        *v = eval(&c, t);
+    }
+    let values = &values[..breaks.len()];
     if values.iter().all(|v| v.abs() <= graze) {
         return advance(kind, x0, x1, tol, 0.0);
     }
-    let mut candidates = Vec::new();
+    // at most three per piece, three pieces
+    let mut candidates = Times::<9>::new();
     for k in 0..breaks.len() - 1 {
         let (l, r) = (breaks[k], breaks[k + 1]);
         let (fl, fr) = (values[k], values[k + 1]);
@@ -313,9 +359,11 @@ fn toi(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> Option<f64> {
             candidates.push(bisect(&c, l, r, fl));
         }
     }
-    candidates.sort_by(f64::total_cmp);
+    candidates.sort();
     candidates
-        .into_iter()
+        .as_slice()
+        .iter()
+        .copied()
         .find(|&t| distance_at(kind, x0, x1, t) <= tol)
 }
 

@@ -187,12 +187,14 @@ fn edge_edge_ids(edges: &[[u32; 2]], a: u32, b: u32) -> [u32; 4] {
 fn impact(ids: [u32; 4], vt: bool, x0: &[Vec3], x1: &[Vec3], tol: f64) -> Option<([u32; 4], f64)> {
     let a = ids.map(|i| x0[i as usize]);
     let b = ids.map(|i| x1[i as usize]);
-    let may_touch = if vt {
-        vertex_triangle_may_touch(&a, &b, tol)
-    } else {
-        edge_edge_may_touch(&a, &b, tol)
+    let may_touch = |from: &[Vec3; 4], to: &[Vec3; 4], tol: f64| {
+        if vt {
+            vertex_triangle_may_touch(from, to, tol)
+        } else {
+            edge_edge_may_touch(from, to, tol)
+        }
     };
-    if !may_touch {
+    if !may_touch(&a, &b, tol) {
         return None;
     }
     let toi = |tol: f64| {
@@ -210,6 +212,10 @@ fn impact(ids: [u32; 4], vt: bool, x0: &[Vec3], x1: &[Vec3], tol: f64) -> Option
         return Some((ids, s));
     }
     let floor = 0.1 * tol;
+    // (cheap: the end positions alone, most pairs end well apart)
+    if !may_touch(&b, &b, floor) {
+        return None;
+    }
     let distance = |x: &[Vec3; 4]| {
         if vt {
             point_triangle(x[0], x[1], x[2], x[3]).dist
@@ -463,7 +469,7 @@ pub fn failsafe(
             hits = all_hits(&boxes, &ye);
             continue;
         }
-        let cand = boxes.touching(&moved);
+        let cand = boxes.touching(&moved, &ys0, &ye);
         hits.retain(|_, (ids, _)| !ids.iter().any(|&i| moved[i as usize]));
         let vt: Vec<_> = cand
             .vt
