@@ -17,6 +17,7 @@ use crate::collision::proximity::proximities;
 use crate::collision::repulsion::Penalty;
 use crate::collision::response::{self, ObstacleContact};
 use crate::error::{Error, Result};
+use crate::forces::pair_sum::PairSums;
 use crate::forces::{AirDrag, Force, Gravity, Repulsions, SpringDamping, Springs};
 use crate::linalg::BlockMatrix;
 use crate::linalg::direct::DirectSolver;
@@ -101,6 +102,8 @@ pub struct StepReport {
     pub newton_iterations: u32,
     /// Total (P)CG iterations over the Newton iterations (0 with the direct solver).
     pub cg_iterations: usize,
+    /// Linear solves (more than one per Newton iteration when contacts were released).
+    pub linear_solves: usize,
     /// Final relative residual of the last PCG solve (0 with the direct solver).
     pub residual: f64,
     /// Seconds spent assembling forces and matrices.
@@ -141,6 +144,11 @@ pub struct Simulation {
     direct: DirectSolver,
 }
 
+/// Linear solves per Newton iteration at most: after each, obstacle contacts whose impulse
+/// pulls are released and the system solved again from the previous solution; contacts still
+/// pulling after the last round stay held for this step (and are re-examined at the next).
+const CONTACT_ROUNDS: usize = 2;
+
 /// Ratio of kinetic energies across one step above which the step counts as a blow-up.
 const BLOWUP_RATIO: f64 = 1e4;
 
@@ -161,6 +169,7 @@ impl Simulation {
                 rest: stiff.iter().map(|&k| s.rest[k]).collect(),
                 k: stiff.iter().map(|&k| s.stiffness[k]).collect(),
                 clamp_compression: true,
+                sums: PairSums::default(),
             }));
         }
         if !damped.is_empty() {
@@ -169,6 +178,7 @@ impl Simulation {
                 j: damped.iter().map(|&k| s.j[k]).collect(),
                 c: damped.iter().map(|&k| s.damping[k]).collect(),
                 position_jacobian: settings.damping_x_jacobian,
+                sums: PairSums::default(),
             }));
         }
         if model.drag.iter().any(|&c| c > 0.0) {
@@ -236,6 +246,15 @@ impl Simulation {
     /// Kinetic plus potential energy.
     pub fn total_energy(&self) -> f64 {
         self.model.kinetic_energy() + self.potential_energy()
+    }
+
+    /// Assembles the system matrix `M - h D - h² K` at the current state without contacts
+    /// (what the first iteration of a contact-free step solves) into [`Simulation::matrix`];
+    /// for benchmarks and inspection.
+    pub fn assemble_matrix(&mut self, h: f64) {
+        let (x, v) = (self.model.x.clone(), self.model.v.clone());
+        self.matrix = self.base_matrix.clone();
+        self.assemble(&x, &v, h, None);
     }
 
     /// Assembles `A = M - b D - a K` at `(x, v)` (with `a = h²`, `b = h`) into the matrix.
@@ -307,7 +326,19 @@ impl Simulation {
     }
 
     /// Advances by one step of `h` seconds. On error the state is left as it was before.
+    ///
+    /// The step runs on a thread of rayon's current pool (the caller waits), so that its many
+    /// short parallel loops are forked from inside the pool instead of each one being sent to
+    /// it from outside and waited for.
     pub fn step(&mut self, h: f64) -> Result<StepReport> {
+        if rayon::current_thread_index().is_some() {
+            self.step_here(h)
+        } else {
+            rayon::scope(|_| self.step_here(h))
+        }
+    }
+
+    fn step_here(&mut self, h: f64) -> Result<StepReport> {
         if !(h > 0.0 && h.is_finite()) {
             return Err(Error::Invalid(format!(
                 "time step must be a finite number > 0, got {h}"
@@ -413,7 +444,7 @@ impl Simulation {
             report.assembly_seconds += t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
             // Solve; drop obstacle contacts that would pull (adhesive impulse) and solve again.
-            for round in 0..4 {
+            for round in 0..CONTACT_ROUNDS {
                 for i in 0..n {
                     z[i] = if self.model.pinned[i] {
                         -v[i]
@@ -425,17 +456,22 @@ impl Simulation {
                     } else {
                         Mat3::IDENTITY
                     };
-                    dv[i] = if it == 0 && round == 0 {
-                        self.warm_start.get(i).copied().unwrap_or(Vec3::ZERO)
-                    } else {
-                        Vec3::ZERO
-                    };
+                    // initial guess: the previous step's change, then the previous round's
+                    // solution (only the released contacts differ)
+                    if round == 0 {
+                        dv[i] = if it == 0 {
+                            self.warm_start.get(i).copied().unwrap_or(Vec3::ZERO)
+                        } else {
+                            Vec3::ZERO
+                        };
+                    }
                 }
                 for c in &contacts {
                     let i = c.particle as usize;
                     self.filter[i] = Mat3::IDENTITY - outer(c.normal, c.normal);
                     z[i] = c.normal * (c.normal_velocity - c.normal.dot(v[i]));
                 }
+                report.linear_solves += 1;
                 if let Err(e) =
                     self.solve(&rhs, &z, &mut dv, &pcg_settings, symmetric, it, &mut report)
                 {
@@ -457,7 +493,7 @@ impl Simulation {
                 // The last round keeps the contact set its solve used, so the contact list
                 // below (normal reset, friction) matches the velocities it comes with.
                 let scale = impulse.iter().fold(0.0f64, |m, l| m.max(l.abs()));
-                if round == 3 || impulse.iter().all(|&l| l >= -1e-9 * scale) {
+                if round + 1 == CONTACT_ROUNDS || impulse.iter().all(|&l| l >= -1e-9 * scale) {
                     break;
                 }
                 (contacts, impulse) = contacts
