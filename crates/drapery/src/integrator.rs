@@ -135,7 +135,16 @@ pub struct Simulation {
     pub warm_start: Vec<Vec3>,
     forces: Vec<Box<dyn Force>>,
     base_pairs: Vec<(u32, u32)>,
+    /// Mass and model forces, on the fixed pattern of the model's forces.
     base_matrix: BlockMatrix,
+    /// Position in `matrix` of each block of `base_matrix` (when contacts enlarge the pattern).
+    base_slots: Vec<u32>,
+    /// What the preconditioner is built from while contacts enlarge the pattern: the base
+    /// blocks plus the contacts' diagonal blocks (their coupling left out), so the multigrid
+    /// keeps one structure for the whole run.
+    precond_matrix: BlockMatrix,
+    /// State the simulation was created in (the multigrid's reference, see [`Self::reference`]).
+    initial: (Vec<Vec3>, Vec<Vec3>),
     triangles: Vec<[u32; 3]>,
     edges: Vec<[u32; 2]>,
     matrix: BlockMatrix,
@@ -148,6 +157,10 @@ pub struct Simulation {
 /// pulls are released and the system solved again from the previous solution; contacts still
 /// pulling after the last round stay held for this step (and are re-examined at the next).
 const CONTACT_ROUNDS: usize = 2;
+
+/// Strength-of-connection threshold of the multigrid, applied to the system matrix at the
+/// initial state (see [`Simulation::reference`]).
+const MULTIGRID_STRENGTH: f64 = 0.08;
 
 /// Ratio of kinetic energies across one step above which the step counts as a blow-up.
 const BLOWUP_RATIO: f64 = 1e4;
@@ -201,6 +214,7 @@ impl Simulation {
             .map(|&p| if p { Mat3::ZERO } else { Mat3::IDENTITY })
             .collect();
         let (triangles, edges) = (model.triangles(), model.edges());
+        let initial = (model.x.clone(), model.v.clone());
         Ok(Simulation {
             warm_start: vec![Vec3::ZERO; n],
             model,
@@ -209,6 +223,9 @@ impl Simulation {
             steps: 0,
             forces,
             base_matrix: matrix.clone(),
+            base_slots: Vec::new(),
+            precond_matrix: matrix.clone(),
+            initial,
             base_pairs: pairs,
             triangles,
             edges,
@@ -222,6 +239,16 @@ impl Simulation {
     /// The forces acting on the model.
     pub fn forces(&self) -> &[Box<dyn Force>] {
         &self.forces
+    }
+
+    /// Block rows and stored blocks of each level of the multigrid preconditioner, finest first
+    /// (empty before the first multigrid solve).
+    pub fn multigrid_levels(&mut self) -> Vec<(usize, usize)> {
+        let mg = self.pcg.multigrid();
+        mg.level_sizes()
+            .into_iter()
+            .zip(mg.level_blocks())
+            .collect()
     }
 
     /// The system matrix of the last Newton iteration.
@@ -253,19 +280,98 @@ impl Simulation {
     /// for benchmarks and inspection.
     pub fn assemble_matrix(&mut self, h: f64) {
         let (x, v) = (self.model.x.clone(), self.model.v.clone());
-        self.matrix = self.base_matrix.clone();
+        self.use_contact_pattern(None);
         self.assemble(&x, &v, h, None);
     }
 
-    /// Assembles `A = M - b D - a K` at `(x, v)` (with `a = h²`, `b = h`) into the matrix.
-    fn assemble(&mut self, x: &[Vec3], v: &[Vec3], h: f64, contact: Option<&Repulsions>) {
-        self.matrix.clear();
-        for (i, m) in self.model.mass.iter().enumerate() {
-            let k = self.matrix.diag_index(i);
-            self.matrix.values[k] = Mat3::from_diagonal(Vec3::splat(*m));
+    /// Gives the multigrid its reference (once, at the first step): the base system matrix
+    /// for step `h` at the state the simulation was created in, filtered by the pins. The
+    /// hierarchy's structure follows that matrix's strong couplings; since it depends only on
+    /// the scene and `h`, a run resumed from a saved state builds the same hierarchy.
+    fn reference(&mut self, h: f64) {
+        if self.settings.preconditioner != Preconditioner::Multigrid
+            || self.pcg.multigrid().has_reference()
+        {
+            return;
         }
-        for f in all_forces(&self.forces, contact) {
-            f.add_jacobian(x, v, -h * h, -h, &mut self.matrix);
+        let mut r = self.base_matrix.clone();
+        r.clear();
+        for (i, m) in self.model.mass.iter().enumerate() {
+            let k = r.diag_index(i);
+            r.values[k] = Mat3::from_diagonal(Vec3::splat(*m));
+        }
+        let (x, v) = &self.initial;
+        for f in &self.forces {
+            f.add_jacobian(x, v, -h * h, -h, &mut r);
+        }
+        let pins = self
+            .model
+            .pinned
+            .iter()
+            .map(|&p| if p { Mat3::ZERO } else { Mat3::IDENTITY })
+            .collect();
+        let mg = self.pcg.multigrid();
+        mg.params.strength = MULTIGRID_STRENGTH;
+        mg.set_reference(r, pins);
+    }
+
+    /// Sets the system matrix's pattern: the base pattern, or the base plus this step's
+    /// contact pairs (then also where each base block goes in it).
+    fn use_contact_pattern(&mut self, contact: Option<&Repulsions>) {
+        let n = self.model.particle_count();
+        match contact {
+            Some(r) => {
+                let mut pairs = self.base_pairs.clone();
+                r.add_pattern(&mut pairs);
+                self.matrix = BlockMatrix::from_pairs(n, &pairs);
+                let (base, merged) = (&self.base_matrix, &self.matrix);
+                self.base_slots.clear();
+                for i in 0..n {
+                    let (cols, _) = base.row(i);
+                    let (mcols, mr) = merged.row(i);
+                    let mut k = 0;
+                    for c in cols {
+                        while mcols[k] != *c {
+                            k += 1;
+                        }
+                        self.base_slots.push((mr.start + k) as u32);
+                    }
+                }
+            }
+            None if !self.matrix.same_pattern(&self.base_matrix) => {
+                self.matrix = self.base_matrix.clone();
+            }
+            None => {}
+        }
+    }
+
+    /// Assembles `A = M - b D - a K` at `(x, v)` (with `a = h²`, `b = h`): the mass and the
+    /// model's forces on the base pattern, then, with contacts, into the enlarged system
+    /// matrix with the contact blocks added (and the preconditioner's matrix).
+    fn assemble(&mut self, x: &[Vec3], v: &[Vec3], h: f64, contact: Option<&Repulsions>) {
+        let base = &mut self.base_matrix;
+        base.clear();
+        for (i, m) in self.model.mass.iter().enumerate() {
+            let k = base.diag_index(i);
+            base.values[k] = Mat3::from_diagonal(Vec3::splat(*m));
+        }
+        for f in &self.forces {
+            f.add_jacobian(x, v, -h * h, -h, base);
+        }
+        let Some(c) = contact else {
+            self.matrix.values.copy_from_slice(&self.base_matrix.values);
+            return;
+        };
+        self.matrix.clear();
+        for (k, &slot) in self.base_slots.iter().enumerate() {
+            self.matrix.values[slot as usize] = self.base_matrix.values[k];
+        }
+        c.add_jacobian(x, v, -h * h, -h, &mut self.matrix);
+        let p = &mut self.precond_matrix;
+        p.values.copy_from_slice(&self.base_matrix.values);
+        for i in 0..self.model.particle_count() {
+            let k = p.diag_index(i);
+            p.values[k] = self.matrix.values[self.matrix.diag_index(i)];
         }
     }
 
@@ -364,6 +470,7 @@ impl Simulation {
             preconditioner: self.settings.preconditioner,
         };
 
+        self.reference(h);
         // Contacts found at the start of the step.
         let tc = Instant::now();
         let collision = self.model.collision;
@@ -398,17 +505,7 @@ impl Simulation {
             _ => None,
         };
         report.self_contacts = repulsions.as_ref().map_or(0, |r| r.stencils.len());
-        match &repulsions {
-            Some(r) => {
-                let mut pairs = self.base_pairs.clone();
-                r.add_pattern(&mut pairs);
-                self.matrix = BlockMatrix::from_pairs(n, &pairs);
-            }
-            None if self.matrix.nnz_blocks() != self.base_matrix.nnz_blocks() => {
-                self.matrix = self.base_matrix.clone()
-            }
-            None => {}
-        }
+        self.use_contact_pattern(repulsions.as_ref());
         let contact_force = repulsions.as_ref();
         report.collision_seconds += tc.elapsed().as_secs_f64();
 
@@ -655,8 +752,14 @@ impl Simulation {
     ) -> Result<()> {
         match self.settings.linear_solver {
             LinearSolver::Pcg => {
-                let stats = pcg::solve(
+                let p = if self.matrix.same_pattern(&self.base_matrix) {
+                    &self.base_matrix
+                } else {
+                    &self.precond_matrix
+                };
+                let stats = pcg::solve_preconditioned_by(
                     &self.matrix,
+                    p,
                     rhs,
                     &self.filter,
                     z,
