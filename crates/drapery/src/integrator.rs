@@ -149,6 +149,7 @@ pub struct Simulation {
     edges: Vec<[u32; 2]>,
     matrix: BlockMatrix,
     filter: Vec<Mat3>,
+    buffers: StepBuffers,
     pcg: PcgScratch,
     direct: DirectSolver,
 }
@@ -161,6 +162,18 @@ const CONTACT_ROUNDS: usize = 2;
 /// Strength-of-connection threshold of the multigrid, applied to the system matrix at the
 /// initial state (see [`Simulation::reference`]).
 const MULTIGRID_STRENGTH: f64 = 0.08;
+
+/// Per-particle work vectors of a step, kept between steps.
+#[derive(Default)]
+struct StepBuffers {
+    f: Vec<Vec3>,
+    rhs: Vec<Vec3>,
+    w: Vec<Vec3>,
+    z: Vec<Vec3>,
+    dv: Vec<Vec3>,
+    kw: Vec<Vec3>,
+    r: Vec<Vec3>,
+}
 
 /// Ratio of kinetic energies across one step above which the step counts as a blow-up.
 const BLOWUP_RATIO: f64 = 1e4;
@@ -231,6 +244,7 @@ impl Simulation {
             edges,
             matrix,
             filter,
+            buffers: StepBuffers::default(),
             pcg: PcgScratch::default(),
             direct: DirectSolver::default(),
         })
@@ -512,11 +526,19 @@ impl Simulation {
         // Iterate on v; x = x0 + h v except at the first linearization point (x0, v0).
         let mut v = v0.clone();
         let mut x = x0.clone();
-        let mut f = vec![Vec3::ZERO; n];
-        let mut rhs = vec![Vec3::ZERO; n];
-        let mut w = vec![Vec3::ZERO; n];
-        let mut z = vec![Vec3::ZERO; n];
-        let mut dv = vec![Vec3::ZERO; n];
+        // work vectors kept between steps (a failed step leaves them to be allocated again)
+        let StepBuffers {
+            mut f,
+            mut rhs,
+            mut w,
+            mut z,
+            mut dv,
+            mut kw,
+            mut r,
+        } = std::mem::take(&mut self.buffers);
+        for b in [&mut f, &mut rhs, &mut w, &mut z, &mut dv, &mut kw, &mut r] {
+            b.resize(n, Vec3::ZERO);
+        }
         let mut impulse = vec![0.0; contacts.len()];
         let newton = self.settings.newton_iterations;
         for it in 0..newton {
@@ -531,7 +553,7 @@ impl Simulation {
                 w[i] = x0[i] + h * v[i] - x[i];
                 rhs[i] = self.model.mass[i] * (v0[i] - v[i]) + h * f[i];
             }
-            let mut kw = vec![Vec3::ZERO; n];
+            kw.iter_mut().for_each(|e| *e = Vec3::ZERO);
             for force in all_forces(&self.forces, contact_force) {
                 force.add_jacobian_product(&x, &v, h, 0.0, &w, &mut kw);
             }
@@ -578,7 +600,6 @@ impl Simulation {
                 if contacts.is_empty() {
                     break;
                 }
-                let mut r = vec![Vec3::ZERO; n];
                 self.matrix.mul_vec(&dv, &mut r);
                 impulse = contacts
                     .iter()
@@ -733,6 +754,15 @@ impl Simulation {
         for i in 0..n {
             self.warm_start[i] = self.model.v[i] - v0[i];
         }
+        self.buffers = StepBuffers {
+            f,
+            rhs,
+            w,
+            z,
+            dv,
+            kw,
+            r,
+        };
         self.time += h;
         self.steps += 1;
         Ok(report)
