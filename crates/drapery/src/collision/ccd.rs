@@ -232,9 +232,36 @@ fn bisect(c: &[f64; 4], mut lo: f64, mut hi: f64, flo: f64) -> f64 {
     lo
 }
 
+/// True when the two primitives cannot come within `tol` of each other during the step: the
+/// origin is outside the box (inflated by `tol` plus a rounding slack) of the relative vectors
+/// between their vertices at both ends of the step. Every point of the difference set of the two
+/// primitives (the triangle relative to the point, or the parallelogram of the two edges) is a
+/// convex combination of those vectors, each moving linearly, so it stays inside their box over
+/// the whole step. Cheap, and it rejects most broad-phase pairs of cloth moving together.
+fn far_apart(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> bool {
+    let pairs: &[(usize, usize)] = match kind {
+        Kind::VertexTriangle => &[(1, 0), (2, 0), (3, 0)],
+        Kind::EdgeEdge => &[(0, 2), (0, 3), (1, 2), (1, 3)],
+    };
+    let mut lo = Vec3::splat(f64::INFINITY);
+    let mut hi = Vec3::splat(f64::NEG_INFINITY);
+    for &(i, j) in pairs {
+        for x in [x0, x1] {
+            let r = x[i] - x[j];
+            lo = lo.min(r);
+            hi = hi.max(r);
+        }
+    }
+    let r = tol + 1e-9 * lo.abs().max(hi.abs()).max_element();
+    lo.cmpgt(Vec3::splat(r)).any() || hi.cmplt(Vec3::splat(-r)).any()
+}
+
 fn toi(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> Option<f64> {
     if !finite(x0, x1) || tol.is_nan() {
         return Some(0.0);
+    }
+    if far_apart(kind, x0, x1, tol.max(0.0)) {
+        return None;
     }
     let s = size(x0, x1);
     let tol = tol.max(0.0) + 1e-12 * s;
@@ -580,6 +607,32 @@ mod tests {
             prop_assert!(t <= tstar + 1e-9, "t={t} tstar={tstar}");
             let d = distance_at(Kind::EdgeEdge, &a, &b, t);
             prop_assert!(d <= TOL + 1e-11 * (1.0 + v.length()), "d={d} at t={t}");
+        }
+
+        #[test]
+        fn the_quick_rejection_never_drops_a_pair_that_comes_within_the_tolerance(
+            a in prop::array::uniform4(v3(0.3)),
+            b in prop::array::uniform4(v3(0.3)),
+            shift in v3(1.0),
+            tol in 0.0..0.3f64,
+            ee in any::<bool>(),
+        ) {
+            // move the second primitive as a whole, so both outcomes occur
+            let kind = if ee { Kind::EdgeEdge } else { Kind::VertexTriangle };
+            let second = if ee { 2..4 } else { 1..4 };
+            let (mut a, mut b) = (a, b);
+            for i in second {
+                a[i] += shift;
+                b[i] += shift;
+            }
+            if far_apart(kind, &a, &b, tol) {
+                for k in 0..=1000 {
+                    let t = k as f64 / 1000.0;
+                    prop_assert!(distance_at(kind, &a, &b, t) > tol, "t={t}");
+                }
+                let r = if ee { edge_edge_toi(&a, &b, tol) } else { vertex_triangle_toi(&a, &b, tol) };
+                prop_assert_eq!(r, None);
+            }
         }
 
         #[test]

@@ -16,6 +16,7 @@ use super::broad_phase::Candidates;
 use super::distance::{point_triangle, segment_segment};
 use super::repulsion::{edge_edge_weights, point_triangle_weights};
 use crate::math::Vec3;
+use rayon::prelude::*;
 
 /// Kind of stencil.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -61,40 +62,50 @@ pub fn proximities(
     candidates: &Candidates,
     thickness: f64,
 ) -> Vec<Proximity> {
-    let mut out = Vec::new();
-    for &(v, t) in &candidates.vt {
-        let tri = triangles[t as usize];
-        let [a, b, c] = tri.map(|i| x[i as usize]);
-        let p = x[v as usize];
-        let r = point_triangle(p, a, b, c);
-        if r.dist < thickness {
-            let fallback = unit_or((b - a).cross(c - a), Vec3::Z);
-            out.push(Proximity {
-                kind: StencilKind::VertexTriangle,
-                particles: [v, tri[0], tri[1], tri[2]],
-                weights: point_triangle_weights(r.bary),
-                dist: r.dist,
-                normal: unit_or(p - r.q, fallback),
-            });
-        }
-    }
-    for &(e, f) in &candidates.ee {
-        let (ea, eb) = (edges[e as usize], edges[f as usize]);
-        let [p0, p1] = ea.map(|i| x[i as usize]);
-        let [q0, q1] = eb.map(|i| x[i as usize]);
-        let r = segment_segment(p0, p1, q0, q1);
-        let interior = r.s > 0.0 && r.s < 1.0 && r.t > 0.0 && r.t < 1.0;
-        if r.dist < thickness && interior {
-            let fallback = unit_or((p1 - p0).cross(q1 - q0), Vec3::Z);
-            out.push(Proximity {
-                kind: StencilKind::EdgeEdge,
-                particles: [ea[0], ea[1], eb[0], eb[1]],
-                weights: edge_edge_weights(r.s, r.t),
-                dist: r.dist,
-                normal: unit_or(r.p - r.q, fallback),
-            });
-        }
-    }
+    let vt = candidates
+        .vt
+        .par_iter()
+        .with_min_len(1024)
+        .filter_map(|&(v, t)| {
+            let tri = triangles[t as usize];
+            let [a, b, c] = tri.map(|i| x[i as usize]);
+            let p = x[v as usize];
+            let r = point_triangle(p, a, b, c);
+            (r.dist < thickness).then(|| {
+                let fallback = unit_or((b - a).cross(c - a), Vec3::Z);
+                Proximity {
+                    kind: StencilKind::VertexTriangle,
+                    particles: [v, tri[0], tri[1], tri[2]],
+                    weights: point_triangle_weights(r.bary),
+                    dist: r.dist,
+                    normal: unit_or(p - r.q, fallback),
+                }
+            })
+        });
+    let ee = candidates
+        .ee
+        .par_iter()
+        .with_min_len(1024)
+        .filter_map(|&(e, f)| {
+            let (ea, eb) = (edges[e as usize], edges[f as usize]);
+            let [p0, p1] = ea.map(|i| x[i as usize]);
+            let [q0, q1] = eb.map(|i| x[i as usize]);
+            let r = segment_segment(p0, p1, q0, q1);
+            let interior = r.s > 0.0 && r.s < 1.0 && r.t > 0.0 && r.t < 1.0;
+            (r.dist < thickness && interior).then(|| {
+                let fallback = unit_or((p1 - p0).cross(q1 - q0), Vec3::Z);
+                Proximity {
+                    kind: StencilKind::EdgeEdge,
+                    particles: [ea[0], ea[1], eb[0], eb[1]],
+                    weights: edge_edge_weights(r.s, r.t),
+                    dist: r.dist,
+                    normal: unit_or(r.p - r.q, fallback),
+                }
+            })
+        });
+    // `collect` keeps the candidates' order, whatever the thread count
+    let mut out: Vec<Proximity> = vt.collect();
+    out.par_extend(ee);
     out
 }
 
