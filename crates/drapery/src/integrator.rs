@@ -13,6 +13,7 @@
 //! blow-up) the state is restored and an [`Error::StepFailed`] says what and where.
 
 use crate::collision::broad_phase::candidates;
+use crate::collision::friction;
 use crate::collision::proximity::proximities;
 use crate::collision::repulsion::Penalty;
 use crate::collision::response::{self, ObstacleContact};
@@ -675,8 +676,21 @@ impl Simulation {
             let tc = Instant::now();
             // The push back to the thickness is a position correction: the particle keeps the
             // solved normal displacement but ends the step at rest on the surface (inelastic
-            // contact), not flying off it. Friction then acts on the tangential velocity.
+            // contact), not flying off it. Friction then acts on the tangential velocity:
+            // cloth–cloth contacts first, then obstacles (which bound what holds the pile).
             let solved = v.clone();
+            if let Some(r) = &repulsions {
+                friction::apply_contact_friction(
+                    &mut v,
+                    &x,
+                    &self.model.mass,
+                    &self.model.pinned,
+                    &r.stencils,
+                    &r.penalty,
+                    c.friction,
+                    h,
+                );
+            }
             for ct in &contacts {
                 let i = ct.particle as usize;
                 let vn = ct.normal.dot(v[i]);

@@ -30,7 +30,7 @@
 //! [collision]                   # optional; defaults shown
 //! thickness = 0.005             # m
 //! self_collision = true
-//! friction = 0.3                # Coulomb, every obstacle contact
+//! friction = 0.3                # Coulomb, every contact (cloth–cloth and obstacles)
 //! stiffness = 1000.0            # N/m, cloth–cloth repulsion
 //!
 //! [[collider]]                  # zero or more

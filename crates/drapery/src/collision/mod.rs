@@ -9,6 +9,7 @@
 //! * [`distance`] gives closest points and the barycentric weights of a contact;
 //! * [`proximity`] turns candidates into contact stencils (particle indices and weights);
 //! * [`repulsion`] turns a close pair into forces and a 12×12 Jacobian (MATH.md §4);
+//! * [`friction`] applies Coulomb friction to cloth–cloth contacts after the solve;
 //! * [`ccd`] finds the earliest time of impact over a step, so nothing passes through;
 //! * [`colliders`] describes analytic and mesh obstacles with rigid motion;
 //! * [`check`] counts intersecting triangle pairs and penetrating vertices (a test oracle),
@@ -20,6 +21,7 @@ pub mod check;
 pub mod colliders;
 pub mod distance;
 pub mod frame_check;
+pub mod friction;
 pub mod predicates;
 pub mod proximity;
 pub mod repulsion;

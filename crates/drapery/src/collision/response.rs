@@ -7,7 +7,10 @@
 //! * cloth–cloth close pairs become repulsion stencils ([`crate::forces::Repulsions`]), whose
 //!   Jacobians enter the same matrix.
 //!
-//! After the solve, [`failsafe`] guarantees that nothing passed through anything over the step:
+//! After the solve, Coulomb friction acts on the cloth–cloth contacts
+//! ([`super::friction::apply_contact_friction`]) and then on the obstacle contacts
+//! ([`apply_friction`]); then [`failsafe`] guarantees that nothing passed through anything over
+//! the step:
 //! * each particle's straight path is swept against the analytic obstacles (conservative
 //!   advancement on their signed distance, which is 1-Lipschitz); a particle that would come
 //!   within a tenth of the thickness stops there and moves rigidly with the obstacle for the rest

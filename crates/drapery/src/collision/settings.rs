@@ -11,7 +11,8 @@ pub struct CollisionSettings {
     pub thickness: f64,
     /// Cloth against itself and against other cloths (default: true).
     pub self_collision: bool,
-    /// Coulomb friction coefficient, static and kinetic, for obstacles (default: 0.3).
+    /// Coulomb friction coefficient, static and kinetic, of every contact: cloth–cloth, and
+    /// obstacles without their own (default: 0.3).
     pub friction: f64,
     /// Stiffness of the cloth–cloth repulsion, N/m (default: 1000).
     pub stiffness: f64,

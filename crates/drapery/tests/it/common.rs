@@ -97,3 +97,19 @@ impl Lcg {
         Vec3::new(self.next(), self.next(), self.next())
     }
 }
+
+/// Runs `f` on a rayon pool of `threads` threads.
+pub fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
+/// The exact bits of every coordinate.
+pub fn bits<'a>(v: impl IntoIterator<Item = &'a Vec3>) -> Vec<u64> {
+    v.into_iter()
+        .flat_map(|p| p.to_array().map(f64::to_bits))
+        .collect()
+}

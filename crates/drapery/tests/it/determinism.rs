@@ -7,11 +7,7 @@ use drapery::model::MassSpec;
 #[test]
 fn a_hanging_cloth_gives_identical_bits_on_one_and_two_threads() {
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        on_threads(threads, || {
             let mut sim = hanging_cloth(
                 48,
                 SolverSettings::default(),
@@ -20,11 +16,7 @@ fn a_hanging_cloth_gives_identical_bits_on_one_and_two_threads() {
             for _ in 0..10 {
                 sim.step(1.0 / 60.0).unwrap();
             }
-            sim.model
-                .x
-                .iter()
-                .flat_map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
-                .collect::<Vec<u64>>()
+            bits(&sim.model.x)
         })
     };
     assert_eq!(run(1), run(2));
