@@ -68,6 +68,19 @@ pub fn edge_edge_gap_toi(x0: &[Vec3; 4], x1: &[Vec3; 4], gap: f64) -> Option<f64
     advance(Kind::EdgeEdge, x0, x1, gap.max(0.0), slack(x0, x1))
 }
 
+/// False when the moving point `x[0]` and triangle `x[1] x[2] x[3]` cannot come within `tol`
+/// of each other during the step (a cheap conservative test that rejects most broad-phase pairs
+/// of cloth moving together; the queries above start with it).
+pub fn vertex_triangle_may_touch(x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> bool {
+    !far_apart(Kind::VertexTriangle, x0, x1, tol.max(0.0))
+}
+
+/// False when the moving edges `x[0] x[1]` and `x[2] x[3]` cannot come within `tol` of each
+/// other during the step (see [`vertex_triangle_may_touch`]).
+pub fn edge_edge_may_touch(x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> bool {
+    !far_apart(Kind::EdgeEdge, x0, x1, tol.max(0.0))
+}
+
 /// Positions at time `t`.
 fn at(x0: &[Vec3; 4], x1: &[Vec3; 4], t: f64) -> [Vec3; 4] {
     std::array::from_fn(|i| x0[i] + (x1[i] - x0[i]) * t)
