@@ -82,7 +82,7 @@ pub fn describe(o: &Obstacle) -> String {
             rotation.w
         ),
         Shape::Mesh(m) => format!(
-            "mesh of {} vertices, {} triangles (rotates about its vertex centroid {})",
+            "mesh of {} vertices, {} triangles (turns about {})",
             m.vertices().len(),
             m.triangles().len(),
             v(o.collider.center())

@@ -138,6 +138,7 @@ fn hash_obstacle(h: &mut Fnv, o: &Obstacle) {
         }
         Shape::Mesh(m) => {
             h.bytes(b"mesh");
+            vec(h, m.pivot());
             h.u64(m.vertices().len() as u64);
             for p in m.vertices() {
                 vec(h, *p);

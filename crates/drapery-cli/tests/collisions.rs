@@ -284,7 +284,8 @@ fn validate_prints_colliders_settings_and_the_initial_state() {
     let text = format!(
         "{BASE}\n[collision]\nthickness = 0.01\n\n\
          [[collider]]\nshape = \"sphere\"\ncenter = [0, 0, 0]\nradius = 0.25\nangular_velocity = [0, 2, 0]\n\n\
-         [[collider]]\nshape = \"mesh\"\nmesh = \"plate.obj\"\nfriction = 0.9\n"
+         [[collider]]\nshape = \"mesh\"\nmesh = \"plate.obj\"\nfriction = 0.9\n\n\
+         [[collider]]\nshape = \"mesh\"\nmesh = \"plate.obj\"\ncenter = [0.5, 0, 0]\nangular_velocity = [0, 1, 0]\n"
     );
     let (_t, s) = scene_case(&text, &[("plate.obj", PLATE)]);
     let r = drapery(&["validate".as_ref(), s.as_os_str()]);
@@ -292,7 +293,8 @@ fn validate_prints_colliders_settings_and_the_initial_state() {
     for want in [
         "collision: thickness 0.01 m, self_collision true, friction 0.3, stiffness 1000 N/m",
         "collider[0]: sphere center [0, 0, 0] radius 0.25 m, friction 0.3, angular_velocity [0, 2, 0] rad/s",
-        "collider[1]: mesh of 4 vertices, 2 triangles (rotates about its vertex centroid [0, 0, 0]), friction 0.9",
+        "collider[1]: mesh of 4 vertices, 2 triangles (turns about [0, 0, 0]), friction 0.9",
+        "collider[2]: mesh of 4 vertices, 2 triangles (turns about [0.5, 0, 0]), friction 0.3, angular_velocity [0, 1, 0] rad/s",
         "initial state: no intersection",
     ] {
         assert!(r.stdout.contains(want), "{want:?} not in\n{}", r.stdout);

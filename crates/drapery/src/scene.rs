@@ -36,7 +36,8 @@
 //! [[collider]]                  # zero or more
 //! shape = "sphere"              # plane: point, normal · sphere: center, radius ·
 //! center = [0.0, 0.25, 0.0]     # capsule: a, b, radius · box: center, half_extents,
-//! radius = 0.25                 # rotation = [x, y, z, w] · mesh: mesh = "body.obj"
+//! radius = 0.25                 # rotation = [x, y, z, w] · mesh: mesh = "body.obj",
+//!                               # center (optional pivot, default the file's origin)
 //! friction = 0.5                # optional, overrides [collision].friction
 //! velocity = [0.0, 0.0, 0.0]    # optional, m/s
 //! angular_velocity = [0.0, 3.14, 0.0]  # optional, rad/s about the collider's center
@@ -44,7 +45,8 @@
 //!
 //! Collisions are on when the scene has a `[collision]` table or any `[[collider]]` (colliders
 //! alone use the default settings). A collider turns about its [`Collider::center`]: for a mesh
-//! that is the centroid of its vertices, not the origin of its file.
+//! that is its optional `center` key, by default the origin of its OBJ file's coordinates (the
+//! vertices are used as they are in the file, with no placement offset).
 //!
 //! Timing: the number of steps per frame is `round(1/(frame_rate·dt))` and must be whole within
 //! 1e-6 relative and at least 1; the step actually taken is `1/(frame_rate·steps_per_frame)`
@@ -553,7 +555,7 @@ pub const SHAPES: [&str; 5] = ["plane", "sphere", "capsule", "box", "mesh"];
 const SHAPE_KEYS: [(&str, &[&str]); 9] = [
     ("point", &["plane"]),
     ("normal", &["plane"]),
-    ("center", &["sphere", "box"]),
+    ("center", &["sphere", "box", "mesh"]),
     ("radius", &["sphere", "capsule"]),
     ("a", &["capsule"]),
     ("b", &["capsule"]),
@@ -647,6 +649,12 @@ fn obstacle(
             }
         }
         _ => {
+            // the pivot: the file's origin unless `center` says otherwise (checked before the
+            // file is read)
+            let pivot = match c.center {
+                Some(p) => v3("center", Some(p))?,
+                None => Vec3::ZERO,
+            };
             let name = c.mesh.as_ref().ok_or_else(|| need("mesh"))?;
             let mesh_path = dir.join(name);
             let mesh = crate::io::obj::read_obj(&mesh_path).map_err(|e| match e {
@@ -663,7 +671,7 @@ fn obstacle(
                 )));
             }
             let triangles = mesh.triangles();
-            Shape::Mesh(TriangleMesh::new(mesh.positions, triangles))
+            Shape::Mesh(TriangleMesh::new(mesh.positions, triangles).with_pivot(pivot))
         }
     };
     let friction = match c.friction {
@@ -912,6 +920,9 @@ pin = [0, 2]
             ("[[collider]]\nshape = \"box\"\ncenter = [0, 0, 0]\nhalf_extents = [1, 0, 1]\n".into(), "collider[0] (box): half_extents must be three finite numbers > 0"),
             ("[[collider]]\nshape = \"box\"\ncenter = [0, 0, 0]\nhalf_extents = [1, 1, 1]\nrotation = [0, 0, 0, 0]\n".into(), "collider[0] (box): rotation must be a finite non-zero quaternion"),
             ("[[collider]]\nshape = \"mesh\"\nmesh = \"nope.obj\"\n".into(), "collider[0] (mesh): mesh: cannot read 'dir/nope.obj'"),
+            ("[[collider]]\nshape = \"mesh\"\nmesh = \"nope.obj\"\ncenter = [0, nan, 0]\n".into(), "collider[0] (mesh): center must be finite, got [0, NaN, 0]"),
+            ("[[collider]]\nshape = \"mesh\"\nmesh = \"nope.obj\"\ncenter = [0, 0]\n".into(), "center"),
+            ("[[collider]]\nshape = \"capsule\"\na = [0, 0, 0]\nb = [1, 0, 0]\nradius = 0.1\ncenter = [0, 0, 0]\n".into(), "collider[0] (capsule): `center` is not a key of a capsule (it belongs to sphere, box, mesh)"),
         ];
         for (extra, want) in cases {
             let e = err(&format!("{BASE}\n{extra}"));

@@ -4,7 +4,9 @@
 //! linear velocity `v` of its center `c` and constant angular velocity `ω` about that center,
 //! so a material point `x` of the shape is at `c + v t + R(ω t) (x - c)` at time `t`
 //! (`R(θ)` = rotation by `|θ|` about `θ/|θ|`). The center is the plane's `point`, the sphere's
-//! and box's `center`, the capsule's midpoint, the mesh's vertex centroid.
+//! and box's `center`, the capsule's midpoint, and the mesh's pivot: the origin of the
+//! coordinates its vertices are given in (the OBJ file's origin) unless set with
+//! [`TriangleMesh::with_pivot`].
 //!
 //! [`Collider::closest`] answers, for a query point `p` at time `t`: the signed distance (> 0
 //! outside, < 0 inside), the unit normal (the gradient of the signed distance wherever it is
@@ -78,7 +80,7 @@ pub enum Shape {
 pub struct TriangleMesh {
     vertices: Vec<Vec3>,
     triangles: Vec<[u32; 3]>,
-    centroid: Vec3,
+    pivot: Vec3,
     nodes: Vec<Node>,
     /// Triangle indices in BVH leaf order.
     order: Vec<u32>,
@@ -94,27 +96,34 @@ struct Node {
 }
 
 impl TriangleMesh {
-    /// A mesh from vertices and triangles. Triangles referring to missing vertices are dropped.
+    /// A mesh from vertices and triangles, turning about the origin of the vertices'
+    /// coordinates. Triangles referring to missing vertices are dropped.
     pub fn new(vertices: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> TriangleMesh {
         let n = vertices.len();
         let triangles: Vec<[u32; 3]> = triangles
             .into_iter()
             .filter(|t| t.iter().all(|&i| (i as usize) < n))
             .collect();
-        let centroid = if n > 0 {
-            vertices.iter().sum::<Vec3>() / n as f64
-        } else {
-            Vec3::ZERO
-        };
         let mut m = TriangleMesh {
             vertices,
             triangles,
-            centroid,
+            pivot: Vec3::ZERO,
             nodes: Vec::new(),
             order: Vec::new(),
         };
         m.build();
         m
+    }
+
+    /// The same mesh turning about `pivot` (in the vertices' coordinates) instead of the origin.
+    pub fn with_pivot(mut self, pivot: Vec3) -> TriangleMesh {
+        self.pivot = pivot;
+        self
+    }
+
+    /// The point the mesh turns about, at `t = 0`.
+    pub fn pivot(&self) -> Vec3 {
+        self.pivot
     }
 
     /// Vertices in the pose at `t = 0`.
@@ -284,7 +293,7 @@ impl Collider {
             Shape::Plane { point, .. } => *point,
             Shape::Sphere { center, .. } | Shape::Box { center, .. } => *center,
             Shape::Capsule { a, b, .. } => (*a + *b) * 0.5,
-            Shape::Mesh(m) => m.centroid,
+            Shape::Mesh(m) => m.pivot,
         }
     }
 
@@ -559,6 +568,64 @@ mod tests {
             empty.closest(Vec3::ZERO, 0.0).signed_distance,
             f64::INFINITY
         );
+    }
+
+    /// A 0.4 m square plate of four triangles centred at `c`, in the plane y = c.y.
+    fn plate(c: Vec3) -> TriangleMesh {
+        let v = [
+            (-0.2, -0.2),
+            (0.2, -0.2),
+            (0.2, 0.2),
+            (-0.2, 0.2),
+            (0.0, 0.0),
+        ]
+        .map(|(x, z)| c + Vec3::new(x, 0.0, z));
+        TriangleMesh::new(v.to_vec(), vec![[0, 4, 1], [1, 4, 2], [2, 4, 3], [3, 4, 0]])
+    }
+
+    #[test]
+    fn a_spinning_mesh_turns_about_the_origin_of_its_file_or_its_pivot() {
+        let c = Vec3::new(1.0, 0.3, 0.5);
+        let w = Vec3::new(0.0, 2.0, 0.0);
+        for pivot in [None, Some(Vec3::new(0.7, -1.0, 0.2))] {
+            let mut m = plate(c);
+            if let Some(p) = pivot {
+                m = m.with_pivot(p);
+            }
+            let o = pivot.unwrap_or(Vec3::ZERO);
+            let col = Collider {
+                shape: Shape::Mesh(m.clone()),
+                motion: RigidMotion {
+                    velocity: Vec3::ZERO,
+                    angular_velocity: w,
+                },
+            };
+            assert_eq!(col.center(), o);
+            // step by step, each vertex moves on a circle about the vertical axis through the
+            // pivot: same height, same radius
+            let radius = |p: Vec3| (p - o).with_y(0.0).length();
+            for &v in m.vertices() {
+                for k in 1..=600 {
+                    let t = k as f64 / 60.0;
+                    let p = col.transform_point(v, t);
+                    assert!((p.y - v.y).abs() < 1e-14, "{p}");
+                    assert!((radius(p) - radius(v)).abs() < 1e-13, "{p} at {t}");
+                }
+                // half a turn takes it to the other side of the pivot
+                let p = col.transform_point(v, std::f64::consts::PI / 2.0);
+                let want = o + (o - v).with_y(v.y - o.y);
+                assert!((p - want).length() < 1e-12, "{p} vs {want}");
+            }
+            // the surface velocity is that of the rigid rotation about the pivot
+            let q = Vec3::new(c.x + 0.05, c.y + 0.1, c.z - 0.03);
+            let r = col.closest(q, 0.4);
+            let expect = w.cross(r.point - o);
+            assert!((r.velocity_at_point - expect).length() < 1e-12);
+            assert!(
+                r.velocity_at_point.length() > 0.5,
+                "off the pivot, it moves"
+            );
+        }
     }
 
     proptest! {

@@ -203,7 +203,7 @@ fn impact(ids: [u32; 4], vt: bool, x0: &[Vec3], x1: &[Vec3], tol: f64) -> Option
         }
     };
     let s = match toi(tol) {
-        Some(s) if s == 0.0 => toi(0.0),
+        Some(0.0) => toi(0.0),
         s => s,
     };
     if let Some(s) = s.filter(|&s| s > 0.0) {

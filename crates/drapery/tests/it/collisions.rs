@@ -1,6 +1,8 @@
 //! Collisions end to end at the library level: obstacles, friction, self-contact, no tunneling.
 
-use drapery::collision::check::{count_penetrations, count_self_intersections};
+use drapery::collision::check::{
+    count_intersections_between, count_penetrations, count_self_intersections,
+};
 use drapery::collision::colliders::{Collider, RigidMotion, Shape, TriangleMesh};
 use drapery::collision::settings::{CollisionSettings, Obstacle};
 use drapery::math::Vec3;
@@ -335,4 +337,74 @@ fn a_sheet_starting_deep_inside_a_sphere_is_pushed_out_without_blowing_up() {
     );
     // pushed out, not launched: nothing moves faster than a few m/s
     assert!(s.model.v.iter().all(|v| v.length() < 3.0));
+}
+
+#[test]
+fn a_mesh_spinning_about_the_origin_of_its_file_carries_the_sheet_around_it() {
+    // a 0.5 m plate modelled 0.6 m from the origin, turning at 1 rad/s about the vertical axis
+    // through the origin (the OBJ origin, not its own centre): a sheet resting on it goes round
+    // on a circle of radius 0.6 m
+    let g = Mesh::grid([0.5, 0.5], [6, 6], Vec3::new(0.6, 0.0, 0.0), Vec3::Y).unwrap();
+    let plate = TriangleMesh::new(g.positions.clone(), g.triangles());
+    let (plate_vertices, plate_triangles) = (plate.vertices().to_vec(), plate.triangles().to_vec());
+    let spin = RigidMotion {
+        velocity: Vec3::ZERO,
+        angular_velocity: Vec3::Y,
+    };
+    let obstacle = Obstacle {
+        collider: Collider {
+            shape: Shape::Mesh(plate),
+            motion: spin,
+        },
+        friction: 0.8,
+    };
+    let mut s = sim(
+        vec![sheet(
+            "sheet",
+            7,
+            0.2,
+            Vec3::new(0.6, 0.01, 0.0),
+            Vec3::Y,
+            Vec3::ZERO,
+        )],
+        vec![obstacle],
+        CollisionSettings {
+            thickness: 0.01,
+            ..Default::default()
+        },
+    );
+    let tris = s.model.triangles();
+    let h = 1.0 / 60.0;
+    for k in 0..60 {
+        s.step(h).unwrap_or_else(|e| panic!("step {k}: {e}"));
+        let c = &s.model.obstacles[0].collider;
+        let posed: Vec<Vec3> = plate_vertices
+            .iter()
+            .map(|&p| c.transform_point(p, s.time))
+            .collect();
+        assert_eq!(
+            count_intersections_between(&s.model.x, &tris, &posed, &plate_triangles),
+            0,
+            "the sheet went through the plate at step {k}"
+        );
+        // the plate's vertices stay on their circles about the axis through the origin
+        for (p, q) in posed.iter().zip(&plate_vertices) {
+            assert!((p.with_y(0.0).length() - q.with_y(0.0).length()).abs() < 1e-12);
+        }
+    }
+    let n = s.model.x.len() as f64;
+    let centre = s.model.x.iter().sum::<Vec3>() / n;
+    // turned by 1 rad about +y: angle atan2(z, x) went from 0 to -1 (less a little slip while
+    // the sheet spun up), at the same radius and resting on the plate
+    let angle = centre.z.atan2(centre.x);
+    assert!(
+        (angle + 1.0).abs() < 0.1,
+        "the sheet's centre turned to {angle} rad"
+    );
+    assert!(
+        (centre.with_y(0.0).length() - 0.6).abs() < 0.03,
+        "radius {}",
+        centre.with_y(0.0).length()
+    );
+    assert!(centre.y > 0.0 && centre.y < 0.02, "height {}", centre.y);
 }
