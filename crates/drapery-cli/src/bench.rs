@@ -10,10 +10,8 @@
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use drapery::collision::colliders::{Collider, Shape};
-use drapery::collision::settings::{CollisionSettings, Obstacle};
-use drapery::model::{ClothDesc, MassSpec, Material, Model};
-use drapery::{Mesh, Simulation, SolverSettings, Vec3};
+use drapery::Simulation;
+use drapery::presets::Preset;
 use std::time::Instant;
 
 #[derive(Args)]
@@ -47,92 +45,15 @@ const STANDARD: &[&str] = &[
     "pile-128",
 ];
 
-/// Builds a named scene; returns the simulation and its warm-up frame count.
-/// Splits and checks a scene name `KIND-SIZE`.
-fn parse(name: &str) -> Result<(&str, usize)> {
-    let (kind, n) = name
-        .split_once('-')
-        .with_context(|| format!("scene '{name}': expected KIND-SIZE, e.g. hang-64"))?;
-    let n: usize = n
-        .parse()
-        .ok()
-        .filter(|&n| (2..=2048).contains(&n))
-        .with_context(|| {
-            format!("scene '{name}': the size must be a whole number from 2 to 2048")
-        })?;
-    if !matches!(kind, "hang" | "drape" | "pile") {
-        bail!("scene '{name}': unknown kind '{kind}' (hang, drape or pile)");
-    }
-    Ok((kind, n))
+/// Checks a scene name `KIND-SIZE`.
+fn parse(name: &str) -> Result<(Preset, usize)> {
+    Ok(Preset::parse(name)?)
 }
 
+/// Builds a named scene; returns the simulation and its warm-up frame count.
 fn scene(name: &str, tolerance: f64) -> Result<(Simulation, usize)> {
-    let (kind, n) = parse(name)?;
-    let material = Material {
-        stretch_stiffness: 1000.0,
-        shear_stiffness: 100.0,
-        bend_stiffness: 1.0,
-        damping: 0.01,
-        air_drag: 0.0,
-        mass: MassSpec::Density(0.1),
-    };
-    let (center, normal, pins, obstacle, warm) = match kind {
-        "hang" => (
-            Vec3::new(0.0, 1.0, 0.0),
-            Vec3::Z,
-            vec![0, (n - 1) as u32],
-            None,
-            5,
-        ),
-        "drape" => (
-            Vec3::new(0.0, 0.4, 0.0),
-            Vec3::Y,
-            vec![],
-            Some(Shape::Sphere {
-                center: Vec3::ZERO,
-                radius: 0.3,
-            }),
-            30,
-        ),
-        "pile" => (
-            Vec3::new(0.0, 0.6, 0.0),
-            Vec3::new(0.0, 0.3, 1.0),
-            vec![],
-            Some(Shape::Plane {
-                point: Vec3::ZERO,
-                normal: Vec3::Y,
-            }),
-            40,
-        ),
-        _ => bail!("scene '{name}': unknown kind '{kind}' (hang, drape or pile)"),
-    };
-    let mesh = Mesh::grid([1.0, 1.0], [n, n], center, normal)?;
-    let cloth = ClothDesc {
-        name: kind.into(),
-        mesh,
-        material,
-        pins,
-        initial_velocity: Vec3::ZERO,
-    };
-    let mut model = Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0))?;
-    if let Some(shape) = obstacle {
-        model.collision = Some(CollisionSettings {
-            thickness: 0.005,
-            self_collision: true,
-            friction: 0.3,
-            stiffness: 1000.0,
-        });
-        model.obstacles = vec![Obstacle {
-            collider: Collider::fixed(shape),
-            friction: 0.3,
-        }];
-    }
-    let settings = SolverSettings {
-        tolerance,
-        max_iterations: 20_000,
-        ..Default::default()
-    };
-    Ok((Simulation::new(model, settings)?, warm))
+    let (preset, n) = parse(name)?;
+    Ok((preset.simulation(n, tolerance)?, preset.warm_up_frames()))
 }
 
 /// Peak resident set size of this process, MiB (Linux), if known.

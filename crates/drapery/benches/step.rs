@@ -6,39 +6,20 @@
 
 use drapery::linalg::amg::Multigrid;
 use drapery::linalg::pcg::Preconditioner;
-use drapery::math::{Mat3, Vec3};
-use drapery::mesh::Mesh;
-use drapery::model::{ClothDesc, MassSpec, Material, Model};
+use drapery::math::Mat3;
+use drapery::presets::Preset;
 use drapery::{Simulation, SolverSettings};
 use std::time::Instant;
 
 fn hanging(n: usize, tolerance: f64, preconditioner: Preconditioner) -> Simulation {
-    let mesh = Mesh::grid([1.0, 1.0], [n, n], Vec3::new(0.0, 1.0, 0.0), Vec3::Z).unwrap();
-    let material = Material {
-        stretch_stiffness: 1000.0,
-        shear_stiffness: 100.0,
-        bend_stiffness: 1.0,
-        damping: 0.01,
-        air_drag: 0.0,
-        mass: MassSpec::Density(0.1),
+    let model = Preset::Hang.model(n).unwrap();
+    let settings = SolverSettings {
+        tolerance,
+        max_iterations: 20000,
+        preconditioner,
+        ..Default::default()
     };
-    let cloth = ClothDesc {
-        name: "sheet".into(),
-        mesh,
-        material,
-        pins: vec![0, (n - 1) as u32],
-        initial_velocity: Vec3::ZERO,
-    };
-    Simulation::new(
-        Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0)).unwrap(),
-        SolverSettings {
-            tolerance,
-            max_iterations: 20000,
-            preconditioner,
-            ..Default::default()
-        },
-    )
-    .unwrap()
+    Simulation::new(model, settings).unwrap()
 }
 
 fn median(v: &mut [f64]) -> f64 {

@@ -18,6 +18,7 @@ use crate::collision::proximity::proximities;
 use crate::collision::repulsion::Penalty;
 use crate::collision::response::{self, ObstacleContact};
 use crate::error::{Error, Result};
+use crate::forces::pair_sum::PairSums;
 use crate::forces::{AirDrag, Force, Gravity, Repulsions, SpringDamping, Springs};
 use crate::linalg::BlockMatrix;
 use crate::linalg::direct::DirectSolver;
@@ -102,6 +103,8 @@ pub struct StepReport {
     pub newton_iterations: u32,
     /// Total (P)CG iterations over the Newton iterations (0 with the direct solver).
     pub cg_iterations: usize,
+    /// Linear solves (more than one per Newton iteration when contacts were released).
+    pub linear_solves: usize,
     /// Final relative residual of the last PCG solve (0 with the direct solver).
     pub residual: f64,
     /// Seconds spent assembling forces and matrices.
@@ -133,13 +136,44 @@ pub struct Simulation {
     pub warm_start: Vec<Vec3>,
     forces: Vec<Box<dyn Force>>,
     base_pairs: Vec<(u32, u32)>,
+    /// Mass and model forces, on the fixed pattern of the model's forces.
     base_matrix: BlockMatrix,
+    /// Position in `matrix` of each block of `base_matrix` (when contacts enlarge the pattern).
+    base_slots: Vec<u32>,
+    /// What the preconditioner is built from while contacts enlarge the pattern: the base
+    /// blocks plus the contacts' diagonal blocks (their coupling left out), so the multigrid
+    /// keeps one structure for the whole run.
+    precond_matrix: BlockMatrix,
+    /// State the simulation was created in (the multigrid's reference, see [`Self::reference`]).
+    initial: (Vec<Vec3>, Vec<Vec3>),
     triangles: Vec<[u32; 3]>,
     edges: Vec<[u32; 2]>,
     matrix: BlockMatrix,
     filter: Vec<Mat3>,
+    buffers: StepBuffers,
     pcg: PcgScratch,
     direct: DirectSolver,
+}
+
+/// Linear solves per Newton iteration at most: after each, obstacle contacts whose impulse
+/// pulls are released and the system solved again from the previous solution; contacts still
+/// pulling after the last round stay held for this step (and are re-examined at the next).
+const CONTACT_ROUNDS: usize = 2;
+
+/// Strength-of-connection threshold of the multigrid, applied to the system matrix at the
+/// initial state (see [`Simulation::reference`]).
+const MULTIGRID_STRENGTH: f64 = 0.08;
+
+/// Per-particle work vectors of a step, kept between steps.
+#[derive(Default)]
+struct StepBuffers {
+    f: Vec<Vec3>,
+    rhs: Vec<Vec3>,
+    w: Vec<Vec3>,
+    z: Vec<Vec3>,
+    dv: Vec<Vec3>,
+    kw: Vec<Vec3>,
+    r: Vec<Vec3>,
 }
 
 /// Ratio of kinetic energies across one step above which the step counts as a blow-up.
@@ -162,6 +196,7 @@ impl Simulation {
                 rest: stiff.iter().map(|&k| s.rest[k]).collect(),
                 k: stiff.iter().map(|&k| s.stiffness[k]).collect(),
                 clamp_compression: true,
+                sums: PairSums::default(),
             }));
         }
         if !damped.is_empty() {
@@ -170,6 +205,7 @@ impl Simulation {
                 j: damped.iter().map(|&k| s.j[k]).collect(),
                 c: damped.iter().map(|&k| s.damping[k]).collect(),
                 position_jacobian: settings.damping_x_jacobian,
+                sums: PairSums::default(),
             }));
         }
         if model.drag.iter().any(|&c| c > 0.0) {
@@ -192,6 +228,7 @@ impl Simulation {
             .map(|&p| if p { Mat3::ZERO } else { Mat3::IDENTITY })
             .collect();
         let (triangles, edges) = (model.triangles(), model.edges());
+        let initial = (model.x.clone(), model.v.clone());
         Ok(Simulation {
             warm_start: vec![Vec3::ZERO; n],
             model,
@@ -200,11 +237,15 @@ impl Simulation {
             steps: 0,
             forces,
             base_matrix: matrix.clone(),
+            base_slots: Vec::new(),
+            precond_matrix: matrix.clone(),
+            initial,
             base_pairs: pairs,
             triangles,
             edges,
             matrix,
             filter,
+            buffers: StepBuffers::default(),
             pcg: PcgScratch::default(),
             direct: DirectSolver::default(),
         })
@@ -213,6 +254,16 @@ impl Simulation {
     /// The forces acting on the model.
     pub fn forces(&self) -> &[Box<dyn Force>] {
         &self.forces
+    }
+
+    /// Block rows and stored blocks of each level of the multigrid preconditioner, finest first
+    /// (empty before the first multigrid solve).
+    pub fn multigrid_levels(&mut self) -> Vec<(usize, usize)> {
+        let mg = self.pcg.multigrid();
+        mg.level_sizes()
+            .into_iter()
+            .zip(mg.level_blocks())
+            .collect()
     }
 
     /// The system matrix of the last Newton iteration.
@@ -239,15 +290,103 @@ impl Simulation {
         self.model.kinetic_energy() + self.potential_energy()
     }
 
-    /// Assembles `A = M - b D - a K` at `(x, v)` (with `a = h²`, `b = h`) into the matrix.
-    fn assemble(&mut self, x: &[Vec3], v: &[Vec3], h: f64, contact: Option<&Repulsions>) {
-        self.matrix.clear();
-        for (i, m) in self.model.mass.iter().enumerate() {
-            let k = self.matrix.diag_index(i);
-            self.matrix.values[k] = Mat3::from_diagonal(Vec3::splat(*m));
+    /// Assembles the system matrix `M - h D - h² K` at the current state without contacts
+    /// (what the first iteration of a contact-free step solves) into [`Simulation::matrix`];
+    /// for benchmarks and inspection.
+    pub fn assemble_matrix(&mut self, h: f64) {
+        let (x, v) = (self.model.x.clone(), self.model.v.clone());
+        self.use_contact_pattern(None);
+        self.assemble(&x, &v, h, None);
+    }
+
+    /// Gives the multigrid its reference (once, at the first step): the base system matrix
+    /// for step `h` at the state the simulation was created in, filtered by the pins. The
+    /// hierarchy's structure follows that matrix's strong couplings; since it depends only on
+    /// the scene and `h`, a run resumed from a saved state builds the same hierarchy.
+    fn reference(&mut self, h: f64) {
+        if self.settings.preconditioner != Preconditioner::Multigrid
+            || self.pcg.multigrid().has_reference()
+        {
+            return;
         }
-        for f in all_forces(&self.forces, contact) {
-            f.add_jacobian(x, v, -h * h, -h, &mut self.matrix);
+        let mut r = self.base_matrix.clone();
+        r.clear();
+        for (i, m) in self.model.mass.iter().enumerate() {
+            let k = r.diag_index(i);
+            r.values[k] = Mat3::from_diagonal(Vec3::splat(*m));
+        }
+        let (x, v) = &self.initial;
+        for f in &self.forces {
+            f.add_jacobian(x, v, -h * h, -h, &mut r);
+        }
+        let pins = self
+            .model
+            .pinned
+            .iter()
+            .map(|&p| if p { Mat3::ZERO } else { Mat3::IDENTITY })
+            .collect();
+        let mg = self.pcg.multigrid();
+        mg.params.strength = MULTIGRID_STRENGTH;
+        mg.set_reference(r, pins);
+    }
+
+    /// Sets the system matrix's pattern: the base pattern, or the base plus this step's
+    /// contact pairs (then also where each base block goes in it).
+    fn use_contact_pattern(&mut self, contact: Option<&Repulsions>) {
+        let n = self.model.particle_count();
+        match contact {
+            Some(r) => {
+                let mut pairs = self.base_pairs.clone();
+                r.add_pattern(&mut pairs);
+                self.matrix = BlockMatrix::from_pairs(n, &pairs);
+                let (base, merged) = (&self.base_matrix, &self.matrix);
+                self.base_slots.clear();
+                for i in 0..n {
+                    let (cols, _) = base.row(i);
+                    let (mcols, mr) = merged.row(i);
+                    let mut k = 0;
+                    for c in cols {
+                        while mcols[k] != *c {
+                            k += 1;
+                        }
+                        self.base_slots.push((mr.start + k) as u32);
+                    }
+                }
+            }
+            None if !self.matrix.same_pattern(&self.base_matrix) => {
+                self.matrix = self.base_matrix.clone();
+            }
+            None => {}
+        }
+    }
+
+    /// Assembles `A = M - b D - a K` at `(x, v)` (with `a = h²`, `b = h`): the mass and the
+    /// model's forces on the base pattern, then, with contacts, into the enlarged system
+    /// matrix with the contact blocks added (and the preconditioner's matrix).
+    fn assemble(&mut self, x: &[Vec3], v: &[Vec3], h: f64, contact: Option<&Repulsions>) {
+        let base = &mut self.base_matrix;
+        base.clear();
+        for (i, m) in self.model.mass.iter().enumerate() {
+            let k = base.diag_index(i);
+            base.values[k] = Mat3::from_diagonal(Vec3::splat(*m));
+        }
+        for f in &self.forces {
+            f.add_jacobian(x, v, -h * h, -h, base);
+        }
+        let Some(c) = contact else {
+            self.matrix.values.copy_from_slice(&self.base_matrix.values);
+            return;
+        };
+        self.matrix.clear();
+        for (k, &slot) in self.base_slots.iter().enumerate() {
+            self.matrix.values[slot as usize] = self.base_matrix.values[k];
+        }
+        c.add_jacobian(x, v, -h * h, -h, &mut self.matrix);
+        let p = &mut self.precond_matrix;
+        p.values.copy_from_slice(&self.base_matrix.values);
+        for i in 0..self.model.particle_count() {
+            let k = p.diag_index(i);
+            p.values[k] = self.matrix.values[self.matrix.diag_index(i)];
         }
     }
 
@@ -308,7 +447,19 @@ impl Simulation {
     }
 
     /// Advances by one step of `h` seconds. On error the state is left as it was before.
+    ///
+    /// The step runs on a thread of rayon's current pool (the caller waits), so that its many
+    /// short parallel loops are forked from inside the pool instead of each one being sent to
+    /// it from outside and waited for.
     pub fn step(&mut self, h: f64) -> Result<StepReport> {
+        if rayon::current_thread_index().is_some() {
+            self.step_here(h)
+        } else {
+            rayon::scope(|_| self.step_here(h))
+        }
+    }
+
+    fn step_here(&mut self, h: f64) -> Result<StepReport> {
         if !(h > 0.0 && h.is_finite()) {
             return Err(Error::Invalid(format!(
                 "time step must be a finite number > 0, got {h}"
@@ -334,6 +485,7 @@ impl Simulation {
             preconditioner: self.settings.preconditioner,
         };
 
+        self.reference(h);
         // Contacts found at the start of the step.
         let tc = Instant::now();
         let collision = self.model.collision;
@@ -368,28 +520,26 @@ impl Simulation {
             _ => None,
         };
         report.self_contacts = repulsions.as_ref().map_or(0, |r| r.stencils.len());
-        match &repulsions {
-            Some(r) => {
-                let mut pairs = self.base_pairs.clone();
-                r.add_pattern(&mut pairs);
-                self.matrix = BlockMatrix::from_pairs(n, &pairs);
-            }
-            None if self.matrix.nnz_blocks() != self.base_matrix.nnz_blocks() => {
-                self.matrix = self.base_matrix.clone()
-            }
-            None => {}
-        }
+        self.use_contact_pattern(repulsions.as_ref());
         let contact_force = repulsions.as_ref();
         report.collision_seconds += tc.elapsed().as_secs_f64();
 
         // Iterate on v; x = x0 + h v except at the first linearization point (x0, v0).
         let mut v = v0.clone();
         let mut x = x0.clone();
-        let mut f = vec![Vec3::ZERO; n];
-        let mut rhs = vec![Vec3::ZERO; n];
-        let mut w = vec![Vec3::ZERO; n];
-        let mut z = vec![Vec3::ZERO; n];
-        let mut dv = vec![Vec3::ZERO; n];
+        // work vectors kept between steps (a failed step leaves them to be allocated again)
+        let StepBuffers {
+            mut f,
+            mut rhs,
+            mut w,
+            mut z,
+            mut dv,
+            mut kw,
+            mut r,
+        } = std::mem::take(&mut self.buffers);
+        for b in [&mut f, &mut rhs, &mut w, &mut z, &mut dv, &mut kw, &mut r] {
+            b.resize(n, Vec3::ZERO);
+        }
         let mut impulse = vec![0.0; contacts.len()];
         let newton = self.settings.newton_iterations;
         for it in 0..newton {
@@ -404,7 +554,7 @@ impl Simulation {
                 w[i] = x0[i] + h * v[i] - x[i];
                 rhs[i] = self.model.mass[i] * (v0[i] - v[i]) + h * f[i];
             }
-            let mut kw = vec![Vec3::ZERO; n];
+            kw.iter_mut().for_each(|e| *e = Vec3::ZERO);
             for force in all_forces(&self.forces, contact_force) {
                 force.add_jacobian_product(&x, &v, h, 0.0, &w, &mut kw);
             }
@@ -414,7 +564,7 @@ impl Simulation {
             report.assembly_seconds += t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
             // Solve; drop obstacle contacts that would pull (adhesive impulse) and solve again.
-            for round in 0..4 {
+            for round in 0..CONTACT_ROUNDS {
                 for i in 0..n {
                     z[i] = if self.model.pinned[i] {
                         -v[i]
@@ -426,17 +576,22 @@ impl Simulation {
                     } else {
                         Mat3::IDENTITY
                     };
-                    dv[i] = if it == 0 && round == 0 {
-                        self.warm_start.get(i).copied().unwrap_or(Vec3::ZERO)
-                    } else {
-                        Vec3::ZERO
-                    };
+                    // initial guess: the previous step's change, then the previous round's
+                    // solution (only the released contacts differ)
+                    if round == 0 {
+                        dv[i] = if it == 0 {
+                            self.warm_start.get(i).copied().unwrap_or(Vec3::ZERO)
+                        } else {
+                            Vec3::ZERO
+                        };
+                    }
                 }
                 for c in &contacts {
                     let i = c.particle as usize;
                     self.filter[i] = Mat3::IDENTITY - outer(c.normal, c.normal);
                     z[i] = c.normal * (c.normal_velocity - c.normal.dot(v[i]));
                 }
+                report.linear_solves += 1;
                 if let Err(e) =
                     self.solve(&rhs, &z, &mut dv, &pcg_settings, symmetric, it, &mut report)
                 {
@@ -446,7 +601,6 @@ impl Simulation {
                 if contacts.is_empty() {
                     break;
                 }
-                let mut r = vec![Vec3::ZERO; n];
                 self.matrix.mul_vec(&dv, &mut r);
                 impulse = contacts
                     .iter()
@@ -458,7 +612,7 @@ impl Simulation {
                 // The last round keeps the contact set its solve used, so the contact list
                 // below (normal reset, friction) matches the velocities it comes with.
                 let scale = impulse.iter().fold(0.0f64, |m, l| m.max(l.abs()));
-                if round == 3 || impulse.iter().all(|&l| l >= -1e-9 * scale) {
+                if round + 1 == CONTACT_ROUNDS || impulse.iter().all(|&l| l >= -1e-9 * scale) {
                     break;
                 }
                 (contacts, impulse) = contacts
@@ -614,6 +768,15 @@ impl Simulation {
         for i in 0..n {
             self.warm_start[i] = self.model.v[i] - v0[i];
         }
+        self.buffers = StepBuffers {
+            f,
+            rhs,
+            w,
+            z,
+            dv,
+            kw,
+            r,
+        };
         self.time += h;
         self.steps += 1;
         Ok(report)
@@ -633,8 +796,14 @@ impl Simulation {
     ) -> Result<()> {
         match self.settings.linear_solver {
             LinearSolver::Pcg => {
-                let stats = pcg::solve(
+                let p = if self.matrix.same_pattern(&self.base_matrix) {
+                    &self.base_matrix
+                } else {
+                    &self.precond_matrix
+                };
+                let stats = pcg::solve_preconditioned_by(
                     &self.matrix,
+                    p,
                     rhs,
                     &self.filter,
                     z,

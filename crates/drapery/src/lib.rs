@@ -19,6 +19,7 @@ pub mod linalg;
 pub mod math;
 pub mod mesh;
 pub mod model;
+pub mod presets;
 pub mod render;
 pub mod scene;
 

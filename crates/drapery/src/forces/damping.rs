@@ -7,6 +7,7 @@
 //! needs the direct solver's LU).
 
 use super::Force;
+use super::pair_sum::PairSums;
 use crate::linalg::BlockMatrix;
 use crate::math::{Mat3, Vec3, outer};
 
@@ -21,6 +22,8 @@ pub struct SpringDamping {
     pub c: Vec<f64>,
     /// Include `∂f/∂x` in the Jacobian (non-symmetric).
     pub position_jacobian: bool,
+    /// Gather lists for the parallel sums (build with `PairSums::default()`).
+    pub sums: PairSums,
 }
 
 impl SpringDamping {
@@ -42,6 +45,19 @@ impl SpringDamping {
         let un = u.dot(n);
         -(c / l) * (Mat3::from_diagonal(Vec3::splat(un)) + outer(n, u) - 2.0 * un * outer(n, n))
     }
+
+    /// Block `(i, i)` of `a ∂f/∂x + b ∂f/∂v` for spring `s` (the others follow by ±).
+    #[inline]
+    fn block(&self, s: usize, x: &[Vec3], v: &[Vec3], a: f64, b: f64) -> Mat3 {
+        let Some((n, l, u)) = self.geom(s, x, v) else {
+            return Mat3::ZERO;
+        };
+        let mut blk = -(b * self.c[s]) * outer(n, n);
+        if self.position_jacobian && a != 0.0 {
+            blk += a * self.dfdx(n, l, u, self.c[s]);
+        }
+        blk
+    }
 }
 
 impl Force for SpringDamping {
@@ -57,33 +73,18 @@ impl Force for SpringDamping {
             .sum()
     }
     fn add_force(&self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]) {
-        for s in 0..self.i.len() {
-            if let Some((n, _, u)) = self.geom(s, x, v) {
-                let fs = -self.c[s] * u.dot(n) * n;
-                f[self.i[s] as usize] += fs;
-                f[self.j[s] as usize] -= fs;
-            }
-        }
+        let force = |s: usize| {
+            self.geom(s, x, v)
+                .map_or(Vec3::ZERO, |(n, _, u)| -self.c[s] * u.dot(n) * n)
+        };
+        self.sums.add_vectors(&self.i, &self.j, force, f);
     }
     fn add_pattern(&self, pairs: &mut Vec<(u32, u32)>) {
         pairs.extend(self.i.iter().zip(&self.j).map(|(&a, &b)| (a, b)));
     }
     fn add_jacobian(&self, x: &[Vec3], v: &[Vec3], a: f64, b: f64, m: &mut BlockMatrix) {
-        for s in 0..self.i.len() {
-            let Some((n, l, u)) = self.geom(s, x, v) else {
-                continue;
-            };
-            let (i, j) = (self.i[s] as usize, self.j[s] as usize);
-            // block (i,i) of the combined Jacobian; the others follow by ±.
-            let mut blk = -(b * self.c[s]) * outer(n, n);
-            if self.position_jacobian && a != 0.0 {
-                blk += a * self.dfdx(n, l, u, self.c[s]);
-            }
-            m.add(i, i, blk);
-            m.add(j, j, blk);
-            m.add(i, j, -blk);
-            m.add(j, i, -blk);
-        }
+        self.sums
+            .add_blocks(&self.i, &self.j, |s| self.block(s, x, v, a, b), m);
     }
     fn add_jacobian_product(
         &self,
@@ -94,19 +95,9 @@ impl Force for SpringDamping {
         w: &[Vec3],
         out: &mut [Vec3],
     ) {
-        for s in 0..self.i.len() {
-            let Some((n, l, u)) = self.geom(s, x, v) else {
-                continue;
-            };
-            let (i, j) = (self.i[s] as usize, self.j[s] as usize);
-            let mut blk = -(b * self.c[s]) * outer(n, n);
-            if self.position_jacobian && a != 0.0 {
-                blk += a * self.dfdx(n, l, u, self.c[s]);
-            }
-            let y = blk * (w[i] - w[j]);
-            out[i] += y;
-            out[j] -= y;
-        }
+        let (i, j) = (&self.i, &self.j);
+        let product = |s: usize| self.block(s, x, v, a, b) * (w[i[s] as usize] - w[j[s] as usize]);
+        self.sums.add_vectors(i, j, product, out);
     }
 }
 
@@ -140,6 +131,7 @@ mod tests {
                         j: vec![1, 2, 0],
                         c,
                         position_jacobian: true,
+                        sums: PairSums::default(),
                     },
                 )
             })

@@ -7,6 +7,7 @@
 pub mod damping;
 pub mod drag;
 pub mod gravity;
+pub mod pair_sum;
 pub mod repulsion;
 pub mod spring;
 

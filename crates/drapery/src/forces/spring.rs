@@ -7,6 +7,7 @@
 //! `max(0, 1 - L/ℓ)` so that `-K` stays positive semi-definite (Choi & Ko 2002).
 
 use super::Force;
+use super::pair_sum::PairSums;
 use crate::linalg::BlockMatrix;
 use crate::math::{Mat3, Vec3, outer};
 
@@ -23,6 +24,8 @@ pub struct Springs {
     pub k: Vec<f64>,
     /// Clamp the compressed transverse term in the matrix (default true).
     pub clamp_compression: bool,
+    /// Gather lists for the parallel sums (build with `PairSums::default()`).
+    pub sums: PairSums,
 }
 
 /// Below this length a spring has no direction: it exerts no force and no stiffness.
@@ -63,11 +66,8 @@ impl Force for Springs {
             .sum()
     }
     fn add_force(&self, x: &[Vec3], _v: &[Vec3], f: &mut [Vec3]) {
-        for s in 0..self.i.len() {
-            let (fs, _) = self.eval(s, x);
-            f[self.i[s] as usize] += fs;
-            f[self.j[s] as usize] -= fs;
-        }
+        self.sums
+            .add_vectors(&self.i, &self.j, |s| self.eval(s, x).0, f);
     }
     fn add_pattern(&self, pairs: &mut Vec<(u32, u32)>) {
         pairs.extend(self.i.iter().zip(&self.j).map(|(&a, &b)| (a, b)));
@@ -76,15 +76,8 @@ impl Force for Springs {
         if a == 0.0 {
             return;
         }
-        for s in 0..self.i.len() {
-            let (_, h) = self.eval(s, x);
-            let (i, j) = (self.i[s] as usize, self.j[s] as usize);
-            let ah = a * h;
-            m.add(i, i, -ah);
-            m.add(j, j, -ah);
-            m.add(i, j, ah);
-            m.add(j, i, ah);
-        }
+        self.sums
+            .add_blocks(&self.i, &self.j, |s| -a * self.eval(s, x).1, m);
     }
     fn add_jacobian_product(
         &self,
@@ -98,13 +91,13 @@ impl Force for Springs {
         if a == 0.0 {
             return;
         }
-        for s in 0..self.i.len() {
-            let (_, h) = self.eval(s, x);
-            let (i, j) = (self.i[s] as usize, self.j[s] as usize);
-            let y = a * (h * (w[i] - w[j]));
-            out[i] -= y;
-            out[j] += y;
-        }
+        let (i, j) = (&self.i, &self.j);
+        self.sums.add_vectors(
+            i,
+            j,
+            |s| -a * (self.eval(s, x).1 * (w[i[s] as usize] - w[j[s] as usize])),
+            out,
+        );
     }
 }
 
@@ -134,6 +127,7 @@ mod tests {
                     rest: vec![],
                     k: vec![],
                     clamp_compression: false,
+                    sums: PairSums::default(),
                 };
                 for (p, &(a, b)) in pairs.iter().enumerate() {
                     let l = (x[a as usize] - x[b as usize]).length();
@@ -207,6 +201,7 @@ mod tests {
             rest: vec![2.0],
             k: vec![10.0],
             clamp_compression: false,
+            sums: PairSums::default(),
         };
         let x = [Vec3::ZERO, Vec3::X];
         let w = [Vec3::Y, -Vec3::Y];

@@ -165,6 +165,8 @@ pub struct Multigrid {
     coarse: CoarseSolver,
     /// Timings of the last refresh.
     pub times: SetupTimes,
+    /// Matrix and filter the structure is built from, when set ([`Multigrid::set_reference`]).
+    reference: Option<(BlockMatrix, Vec<Mat3>)>,
 }
 
 impl Multigrid {
@@ -175,7 +177,17 @@ impl Multigrid {
         let t0 = std::time::Instant::now();
         let rebuild = self.levels.first().is_none_or(|l| !l.a.same_pattern(a));
         if rebuild {
-            self.build(a, s);
+            match self.reference.take() {
+                Some((r, rs)) if r.same_pattern(a) => {
+                    self.build(&r, &rs);
+                    numeric::refresh(self, a, s);
+                    self.reference = Some((r, rs));
+                }
+                other => {
+                    self.reference = other;
+                    self.build(a, s);
+                }
+            }
             self.times.structure = t0.elapsed().as_secs_f64();
             self.times.values = 0.0;
         } else {
@@ -188,6 +200,22 @@ impl Multigrid {
     /// Forgets the structure: the next refresh rebuilds it from the values it is given.
     pub fn reset(&mut self) {
         self.levels.clear();
+    }
+
+    /// Builds the structure (strength of connection, aggregates, patterns) from `a` filtered
+    /// by `s` whenever the matrix to refresh has `a`'s pattern, instead of from that matrix's
+    /// own values. With a reference fixed by the problem (the system at its initial state, say)
+    /// and a positive [`AmgParams::strength`], the aggregates follow the strong couplings and
+    /// still do not depend on the step at which the structure happens to be built, so a resumed
+    /// run rebuilds the same hierarchy.
+    pub fn set_reference(&mut self, a: BlockMatrix, s: Vec<Mat3>) {
+        self.reference = Some((a, s));
+        self.levels.clear();
+    }
+
+    /// Whether a reference is set.
+    pub fn has_reference(&self) -> bool {
+        self.reference.is_some()
     }
 
     /// `out = S V(r)`, one V-cycle applied to `r` (which should already be filtered), then

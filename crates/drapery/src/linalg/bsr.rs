@@ -7,16 +7,27 @@
 
 use crate::math::{Mat3, Vec3};
 use rayon::prelude::*;
+use std::sync::Arc;
+
+/// Which blocks a [`BlockMatrix`] stores; shared (not copied) between clones, so that code
+/// caching positions for a pattern can tell by pointer whether it still has the same one.
+#[derive(Debug, PartialEq, Eq)]
+pub struct Pattern {
+    row_ptr: Vec<u32>,
+    col: Vec<u32>,
+    diag: Vec<u32>,
+}
 
 /// Block-CSR matrix of `Mat3` blocks.
 #[derive(Clone, Debug)]
 pub struct BlockMatrix {
-    row_ptr: Vec<u32>,
-    col: Vec<u32>,
-    diag: Vec<u32>,
+    pattern: Arc<Pattern>,
     /// Block values, in row-major pattern order.
     pub values: Vec<Mat3>,
 }
+
+/// Rows per task in row-parallel loops.
+const ROWS: usize = 256;
 
 impl BlockMatrix {
     /// Builds the pattern for `n` block rows: every diagonal block, plus `(i, j)` and `(j, i)`
@@ -43,33 +54,37 @@ impl BlockMatrix {
         }
         let nnz = col.len();
         BlockMatrix {
-            row_ptr,
-            col,
-            diag,
+            pattern: Arc::new(Pattern { row_ptr, col, diag }),
             values: vec![Mat3::ZERO; nnz],
         }
     }
 
+    /// The shared pattern.
+    pub fn pattern(&self) -> &Arc<Pattern> {
+        &self.pattern
+    }
+
     /// Number of block rows (particles).
     pub fn n(&self) -> usize {
-        self.diag.len()
+        self.pattern.diag.len()
     }
 
     /// Number of stored blocks.
     pub fn nnz_blocks(&self) -> usize {
-        self.col.len()
+        self.pattern.col.len()
     }
 
     /// Column indices and value range of block row `i`.
     pub fn row(&self, i: usize) -> (&[u32], std::ops::Range<usize>) {
-        let r = self.row_ptr[i] as usize..self.row_ptr[i + 1] as usize;
-        (&self.col[r.clone()], r)
+        let p = &*self.pattern;
+        let r = p.row_ptr[i] as usize..p.row_ptr[i + 1] as usize;
+        (&p.col[r.clone()], r)
     }
 
     /// Position of block `(i, j)` in `values`, if it is in the pattern.
     pub fn find(&self, i: usize, j: usize) -> Option<usize> {
         if i == j {
-            return Some(self.diag[i] as usize);
+            return Some(self.pattern.diag[i] as usize);
         }
         let (cols, r) = self.row(i);
         cols.binary_search(&(j as u32)).ok().map(|k| r.start + k)
@@ -77,17 +92,17 @@ impl BlockMatrix {
 
     /// Row offsets into `values`: row `i` is `row_ptr[i]..row_ptr[i + 1]`.
     pub fn row_ptr(&self) -> &[u32] {
-        &self.row_ptr
+        &self.pattern.row_ptr
     }
 
     /// Whether `other` has exactly the same pattern (values are not compared).
     pub fn same_pattern(&self, other: &BlockMatrix) -> bool {
-        self.row_ptr == other.row_ptr && self.col == other.col
+        Arc::ptr_eq(&self.pattern, &other.pattern) || self.pattern == other.pattern
     }
 
     /// Position of the diagonal block of row `i`.
     pub fn diag_index(&self, i: usize) -> usize {
-        self.diag[i] as usize
+        self.pattern.diag[i] as usize
     }
 
     /// Sets every value to zero.
@@ -104,11 +119,42 @@ impl BlockMatrix {
         self.values[k] += m;
     }
 
+    /// Calls `f(i, columns, values)` on every block row `i` with its values, row-parallel
+    /// (each row is visited by one task, so `f` decides the order of its own sums).
+    pub fn for_each_row_mut<F>(&mut self, f: F)
+    where
+        F: Fn(usize, &[u32], &mut [Mat3]) + Sync,
+    {
+        let p = &*self.pattern;
+        let n = p.diag.len();
+        let mut chunks = Vec::with_capacity(n.div_ceil(ROWS));
+        let mut rest = &mut self.values[..];
+        let mut start = 0;
+        while start < n {
+            let end = (start + ROWS).min(n);
+            let (head, tail) = rest.split_at_mut((p.row_ptr[end] - p.row_ptr[start]) as usize);
+            chunks.push((start..end, head));
+            rest = tail;
+            start = end;
+        }
+        chunks.into_par_iter().for_each(|(rows, vals)| {
+            let base = p.row_ptr[rows.start] as usize;
+            for i in rows {
+                let r = p.row_ptr[i] as usize..p.row_ptr[i + 1] as usize;
+                f(
+                    i,
+                    &p.col[r.clone()],
+                    &mut vals[r.start - base..r.end - base],
+                );
+            }
+        });
+    }
+
     /// `y = A x`, row-parallel and deterministic.
     pub fn mul_vec(&self, x: &[Vec3], y: &mut [Vec3]) {
         y.par_iter_mut()
             .enumerate()
-            .with_min_len(256)
+            .with_min_len(ROWS)
             .for_each(|(i, yi)| {
                 let (cols, r) = self.row(i);
                 let mut acc = Vec3::ZERO;

@@ -105,22 +105,40 @@ pub fn solve(
     settings: &PcgSettings,
     w: &mut PcgScratch,
 ) -> SolveStats {
+    solve_preconditioned_by(a, a, b, s, z, x, settings, w)
+}
+
+/// [`solve`] with the preconditioner built from `p` instead of `a` (same size; symmetric
+/// positive definite, close to `a`): for instance `a` without some of its coupling blocks, so
+/// that the multigrid keeps its structure while `a`'s pattern changes.
+#[allow(clippy::too_many_arguments)]
+pub fn solve_preconditioned_by(
+    a: &BlockMatrix,
+    p: &BlockMatrix,
+    b: &[Vec3],
+    s: &[Mat3],
+    z: &[Vec3],
+    x: &mut [Vec3],
+    settings: &PcgSettings,
+    w: &mut PcgScratch,
+) -> SolveStats {
     let n = a.n();
+    debug_assert_eq!(p.n(), n);
     for v in [&mut w.r, &mut w.c, &mut w.q, &mut w.s] {
         v.resize(n, Vec3::ZERO);
     }
     let multigrid = settings.preconditioner == Preconditioner::Multigrid;
     if multigrid {
-        w.amg.refresh(a, s);
+        w.amg.refresh(p, s);
     } else {
         w.pinv.resize(n, Mat3::IDENTITY);
         w.pinv
             .par_iter_mut()
             .enumerate()
             .with_min_len(1024)
-            .for_each(|(i, p)| {
-                let d = a.values[a.diag_index(i)];
-                *p = match settings.preconditioner {
+            .for_each(|(i, pi)| {
+                let d = p.values[p.diag_index(i)];
+                *pi = match settings.preconditioner {
                     Preconditioner::Identity | Preconditioner::Multigrid => Mat3::IDENTITY,
                     Preconditioner::Jacobi => Mat3::from_diagonal(Vec3::new(
                         1.0 / d.x_axis.x,

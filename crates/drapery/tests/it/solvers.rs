@@ -233,3 +233,65 @@ fn block_jacobi_pcg_takes_fewer_iterations_than_plain_cg_on_a_64x64_cloth() {
         iters[0]
     );
 }
+
+/// The solve with a preconditioner built from another matrix (the system without its contact
+/// coupling, as the integrator does with cloth–cloth contacts) still solves the system itself.
+#[test]
+fn a_preconditioner_built_from_the_uncoupled_matrix_still_solves_the_coupled_system() {
+    let mut rng = Lcg(11);
+    for trial in 0..10 {
+        let n = 12 + trial;
+        let base = random_spd(n, &mut rng);
+        // contact-like coupling between two particles: [[C, -C], [-C, C]], C positive definite
+        let (p, q) = (0usize, n - 1);
+        let r = Mat3::from_cols(rng.vec3(), rng.vec3(), rng.vec3());
+        let c = r * r.transpose() + Mat3::IDENTITY;
+        let mut pairs: Vec<(u32, u32)> = (0..n)
+            .flat_map(|i| base.row(i).0.iter().map(move |&j| (i as u32, j)))
+            .collect();
+        pairs.push((p as u32, q as u32));
+        let mut a = BlockMatrix::from_pairs(n, &pairs);
+        for i in 0..n {
+            let (cols, rr) = base.row(i);
+            for (&j, k) in cols.iter().zip(rr) {
+                a.add(i, j as usize, base.values[k]);
+            }
+        }
+        a.add(p, p, c);
+        a.add(q, q, c);
+        a.add(p, q, -c);
+        a.add(q, p, -c);
+        let mut pre = base.clone();
+        pre.add(p, p, c);
+        pre.add(q, q, c);
+        let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
+        let s = vec![Mat3::IDENTITY; n];
+        let z = vec![Vec3::ZERO; n];
+        let reference = dense_filtered(&a, &b, &s, &z);
+        for preconditioner in [Preconditioner::BlockJacobi, Preconditioner::Multigrid] {
+            let settings = PcgSettings {
+                tolerance: 1e-12,
+                max_iterations: 1000,
+                preconditioner,
+            };
+            let mut x = vec![Vec3::ZERO; n];
+            let stats = pcg::solve_preconditioned_by(
+                &a,
+                &pre,
+                &b,
+                &s,
+                &z,
+                &mut x,
+                &settings,
+                &mut PcgScratch::default(),
+            );
+            assert!(stats.converged, "trial {trial} {preconditioner:?}");
+            for i in 0..n {
+                assert!(
+                    (x[i] - reference[i]).length() < 1e-8,
+                    "trial {trial} {preconditioner:?} particle {i}"
+                );
+            }
+        }
+    }
+}

@@ -26,6 +26,7 @@ fn springs(clamp: bool) -> Springs {
         rest: vec![1.0, 1.0],
         k: vec![K, K],
         clamp_compression: clamp,
+        sums: Default::default(),
     }
 }
 

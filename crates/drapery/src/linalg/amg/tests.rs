@@ -3,28 +3,11 @@ use crate::integrator::{Simulation, SolverSettings};
 use crate::linalg::direct::DirectSolver;
 use crate::linalg::pcg::{self, PcgScratch, PcgSettings, Preconditioner};
 use crate::math::outer;
-use crate::mesh::Mesh;
-use crate::model::{ClothDesc, MassSpec, Material, Model};
+use crate::presets::Preset;
 
 /// The system matrix of a hanging `n × n` cloth (1 m, 0.1 kg, 1000 N/m) after `steps` steps.
 fn cloth_matrix(n: usize, steps: usize) -> BlockMatrix {
-    let mesh = Mesh::grid([1.0, 1.0], [n, n], Vec3::new(0.0, 1.0, 0.0), Vec3::Z).unwrap();
-    let material = Material {
-        stretch_stiffness: 1000.0,
-        shear_stiffness: 100.0,
-        bend_stiffness: 1.0,
-        damping: 0.01,
-        air_drag: 0.0,
-        mass: MassSpec::Density(0.1),
-    };
-    let cloth = ClothDesc {
-        name: "sheet".into(),
-        mesh,
-        material,
-        pins: vec![0, (n - 1) as u32],
-        initial_velocity: Vec3::ZERO,
-    };
-    let model = Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0)).unwrap();
+    let model = Preset::Hang.model(n).unwrap();
     let mut sim = Simulation::new(model, SolverSettings::default()).unwrap();
     for _ in 0..steps {
         sim.step(1.0 / 60.0).unwrap();
