@@ -20,10 +20,60 @@
 //! alone, and the kinetic energy never grows (`|P| ≤ m_eff |uₜ|`). Contacts are processed one
 //! after the other in their (deterministic) order, each with the velocities left by the ones
 //! before, so the result is the same whatever the number of threads.
+//!
+//! A particle in several contacts with different normals gets, from one contact's friction, a
+//! velocity change that is partly normal for another. In a crumpled pile that pushed most
+//! contacts together: in the 128² pile of `drapery bench`, 86 000 of 101 000 contacts approached
+//! faster, by up to 0.66 m/s, and over its first 45 steps the collision fail-safe had 932 000
+//! colliding pairs to stop (130 000 without friction) and took 92 s (5.6 s). So a last pass
+//! (sweeps until nothing changes, at most [`NORMAL_SWEEPS`]) gives normal impulses `Q n`, `Δvᵢ = wᵢ Q n / mᵢ`, to every contact that now
+//! approaches faster than the solve left it (or at all, if it was separating), just enough to
+//! take that back. Those impulses conserve momentum too and never add energy: they raise an
+//! approach speed `c < t ≤ 0` to `t`, changing the kinetic energy by `m_eff (t - c)(t + c)/2 ≤ 0`.
+//! With it, those 45 steps had 271 000 colliding pairs and 10 s of collision handling (with two
+//! sweeps at most 14 s, four 6.5 s, eight 17 s: the pile folds differently each time).
 
 use super::proximity::Proximity;
 use super::repulsion::Penalty;
 use crate::math::Vec3;
+
+/// Most sweeps of the pass that takes back the approach friction added to other contacts (it
+/// stops at the first sweep that changes nothing).
+const NORMAL_SWEEPS: usize = 16;
+
+/// A stencil's particles, their inverse masses (0 for pinned particles and, defensively,
+/// non-positive masses) and `Σ wᵢ²/mᵢ = 1/m_eff`, or `None` when nothing of it can move.
+fn movable(s: &Proximity, mass: &[f64], pinned: &[bool]) -> Option<([usize; 4], [f64; 4], f64)> {
+    let p = s.particles.map(|i| i as usize);
+    let inv_mass = p.map(|i| {
+        let im = 1.0 / mass[i];
+        if pinned[i] || !im.is_finite() || im <= 0.0 {
+            0.0
+        } else {
+            im
+        }
+    });
+    let w_sum: f64 = (0..4)
+        .map(|a| s.weights[a] * s.weights[a] * inv_mass[a])
+        .sum();
+    (w_sum > 0.0 && w_sum.is_finite()).then_some((p, inv_mass, w_sum))
+}
+
+/// The relative velocity `Σ wᵢ vᵢ` of a stencil's two closest points.
+fn relative(s: &Proximity, v: &[Vec3]) -> Vec3 {
+    (0..4)
+        .map(|a| v[s.particles[a] as usize] * s.weights[a])
+        .sum()
+}
+
+/// Gives the impulse `P` to a stencil: `Δvᵢ = wᵢ P / mᵢ`.
+fn give(v: &mut [Vec3], s: &Proximity, p: &[usize; 4], inv_mass: &[f64; 4], impulse: Vec3) {
+    for a in 0..4 {
+        if inv_mass[a] > 0.0 {
+            v[p[a]] += impulse * (s.weights[a] * inv_mass[a]);
+        }
+    }
+}
 
 /// Applies Coulomb friction with coefficient `mu` to the cloth–cloth contact `stencils` of a
 /// step of `h` seconds whose solve ended at positions `x` (see the module docs). `v` is updated
@@ -42,30 +92,24 @@ pub fn apply_contact_friction(
     if !(mu > 0.0 && mu.is_finite() && h > 0.0) {
         return;
     }
+    // normal relative velocity each contact left the solve with
+    let solved: Vec<f64> = stencils
+        .iter()
+        .map(|s| s.normal.dot(relative(s, v)))
+        .collect();
     for s in stencils {
-        let p = s.particles.map(|i| i as usize);
         let n = s.normal;
-        let u: Vec3 = (0..4).map(|a| x[p[a]] * s.weights[a]).sum();
+        let u: Vec3 = (0..4)
+            .map(|a| x[s.particles[a] as usize] * s.weights[a])
+            .sum();
         let jn = h * penalty.stiffness * (penalty.thickness - n.dot(u)).max(0.0);
         if !(jn > 0.0 && jn.is_finite()) {
             continue;
         }
-        // pinned particles (and, defensively, non-positive masses) do not move
-        let inv_mass = p.map(|i| {
-            let im = 1.0 / mass[i];
-            if pinned[i] || !im.is_finite() || im <= 0.0 {
-                0.0
-            } else {
-                im
-            }
-        });
-        let w_sum: f64 = (0..4)
-            .map(|a| s.weights[a] * s.weights[a] * inv_mass[a])
-            .sum();
-        if !(w_sum > 0.0 && w_sum.is_finite()) {
+        let Some((p, inv_mass, w_sum)) = movable(s, mass, pinned) else {
             continue;
-        }
-        let rel: Vec3 = (0..4).map(|a| v[p[a]] * s.weights[a]).sum();
+        };
+        let rel = relative(s, v);
         let tangential = rel - n * n.dot(rel);
         let speed = tangential.length();
         if !(speed > 0.0 && speed.is_finite()) {
@@ -73,10 +117,24 @@ pub fn apply_contact_friction(
         }
         let m_eff = 1.0 / w_sum;
         let impulse = tangential * (-(m_eff * speed).min(mu * jn) / speed);
-        for a in 0..4 {
-            if inv_mass[a] > 0.0 {
-                v[p[a]] += impulse * (s.weights[a] * inv_mass[a]);
+        give(v, s, &p, &inv_mass, impulse);
+    }
+    // Take back the approach friction added to other contacts (see the module docs).
+    for _ in 0..NORMAL_SWEEPS {
+        let mut changed = false;
+        for (s, &un_solved) in stencils.iter().zip(&solved) {
+            let target = un_solved.min(0.0);
+            let un = s.normal.dot(relative(s, v));
+            if un >= target || un.is_nan() {
+                continue;
             }
+            if let Some((p, inv_mass, w_sum)) = movable(s, mass, pinned) {
+                give(v, s, &p, &inv_mass, s.normal * ((target - un) / w_sum));
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
         }
     }
 }
@@ -134,12 +192,6 @@ mod tests {
         v.iter()
             .zip(m)
             .map(|(v, m)| 0.5 * m * v.length_squared())
-            .sum()
-    }
-
-    fn relative(s: &Proximity, v: &[Vec3]) -> Vec3 {
-        (0..4)
-            .map(|a| v[s.particles[a] as usize] * s.weights[a])
             .sum()
     }
 
@@ -214,6 +266,58 @@ mod tests {
             prop_assert!((t1.length() - expect).abs() <= 1e-9 * (1.0 + t0.length()),
                 "|uₜ| {} -> {}, expected {expect}", t0.length(), t1.length());
         }
+    }
+
+    #[test]
+    fn friction_on_the_floor_does_not_push_the_vertex_into_the_wall() {
+        // particle 0 slides along a slanted wall (normal n_b, velocity tangent to it) and down
+        // toward the floor (normal +y); the floor's static friction alone would stop its
+        // sideways motion and leave it falling into the wall at 0.48 m/s
+        let n_b = Vec3::new(0.6, 0.8, 0.0);
+        let p = Vec3::new(0.0, 0.005, 0.0);
+        let (t1, t2) = (Vec3::Z, n_b.cross(Vec3::Z));
+        let wall = p - n_b * 0.005;
+        let x = vec![
+            p,
+            Vec3::new(-1.0, 0.0, -1.0),
+            Vec3::new(1.0, 0.0, -1.0),
+            Vec3::new(0.0, 0.0, 2.0),
+            wall + t2,
+            wall - t2 * 0.5 + t1,
+            wall - t2 * 0.5 - t1,
+        ];
+        let w = point_triangle_weights([1.0 / 3.0; 3]);
+        let contact = |ids: [u32; 4], normal: Vec3| Proximity {
+            kind: StencilKind::VertexTriangle,
+            particles: ids,
+            weights: w,
+            dist: 0.005,
+            normal,
+        };
+        let (floor, side) = (contact([0, 1, 2, 3], Vec3::Y), contact([0, 4, 5, 6], n_b));
+        let pinned = [false, true, true, true, true, true, true];
+        let m = [1e-3; 7];
+        let v0 = vec![
+            Vec3::new(0.8, -0.6, 0.0),
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::ZERO,
+        ];
+        let mut v = v0.clone();
+        apply_contact_friction(&mut v, &x, &m, &pinned, &[floor, side], &PEN, 0.5, 0.01);
+        let un = |s: &Proximity, v: &[Vec3]| s.normal.dot(relative(s, v));
+        assert!(
+            un(&side, &v) >= -1e-12,
+            "pushed into the wall: {}",
+            un(&side, &v)
+        );
+        assert!(un(&floor, &v) >= un(&floor, &v0) - 1e-12);
+        assert!(kinetic(&v, &m) < kinetic(&v0, &m));
+        // it still lost speed to friction along the floor
+        assert!(v[0].x < 0.5, "{v:?}");
     }
 
     #[test]
