@@ -11,7 +11,7 @@ use drapery::collision::broad_phase::candidates;
 use drapery::linalg::BlockMatrix;
 use drapery::linalg::amg::Multigrid;
 use drapery::linalg::pcg::{self, PcgScratch, PcgSettings, Preconditioner};
-use drapery::math::{Mat3, Vec3};
+use drapery::math::Vec3;
 use drapery::presets::Preset;
 use rayon::prelude::*;
 
@@ -29,14 +29,6 @@ fn hang(n: usize) -> Simulation {
     }
     sim.assemble_matrix(H);
     sim
-}
-
-fn pin_filter(sim: &Simulation) -> Vec<Mat3> {
-    sim.model
-        .pinned
-        .iter()
-        .map(|&p| if p { Mat3::ZERO } else { Mat3::IDENTITY })
-        .collect()
 }
 
 /// Bytes one product streams at least once: the blocks and their column indices, the row
@@ -65,7 +57,7 @@ fn spmv(bencher: Bencher, n: usize) {
 #[divan::bench(args = [64, 128, 256])]
 fn vcycle(bencher: Bencher, n: usize) {
     let sim = hang(n);
-    let s = pin_filter(&sim);
+    let s = sim.model.pin_filter();
     let mut mg = Multigrid::default();
     mg.refresh(sim.matrix(), &s);
     let r: Vec<Vec3> = sim.model.v.iter().zip(&s).map(|(v, f)| *f * *v).collect();
@@ -76,7 +68,7 @@ fn vcycle(bencher: Bencher, n: usize) {
 #[divan::bench(args = [64, 128])]
 fn pcg_solve(bencher: Bencher, n: usize) {
     let sim = hang(n);
-    let s = pin_filter(&sim);
+    let s = sim.model.pin_filter();
     let a = sim.matrix();
     let b: Vec<Vec3> = sim
         .total_force()

@@ -6,7 +6,6 @@
 
 use drapery::linalg::amg::Multigrid;
 use drapery::linalg::pcg::Preconditioner;
-use drapery::math::Mat3;
 use drapery::presets::Preset;
 use drapery::{Simulation, SolverSettings};
 use std::time::Instant;
@@ -54,12 +53,7 @@ fn main() {
             // the multigrid setup, measured apart on each step's matrix (its structure is
             // built on the first step, then only the values are refreshed)
             let mut mg = Multigrid::default();
-            let filter: Vec<Mat3> = sim
-                .model
-                .pinned
-                .iter()
-                .map(|&p| if p { Mat3::ZERO } else { Mat3::IDENTITY })
-                .collect();
+            let filter = sim.model.pin_filter();
             let (mut total, mut asm, mut sol, mut cg, mut setup) =
                 (vec![], vec![], vec![], vec![], vec![]);
             for _ in 0..steps {

@@ -222,11 +222,7 @@ impl Simulation {
         if let Some(c) = &model.collision {
             c.validate()?;
         }
-        let filter = model
-            .pinned
-            .iter()
-            .map(|&p| if p { Mat3::ZERO } else { Mat3::IDENTITY })
-            .collect();
+        let filter = model.pin_filter();
         let (triangles, edges) = (model.triangles(), model.edges());
         let initial = (model.x.clone(), model.v.clone());
         Ok(Simulation {
@@ -254,16 +250,6 @@ impl Simulation {
     /// The forces acting on the model.
     pub fn forces(&self) -> &[Box<dyn Force>] {
         &self.forces
-    }
-
-    /// Block rows and stored blocks of each level of the multigrid preconditioner, finest first
-    /// (empty before the first multigrid solve).
-    pub fn multigrid_levels(&mut self) -> Vec<(usize, usize)> {
-        let mg = self.pcg.multigrid();
-        mg.level_sizes()
-            .into_iter()
-            .zip(mg.level_blocks())
-            .collect()
     }
 
     /// The system matrix of the last Newton iteration.
@@ -310,21 +296,9 @@ impl Simulation {
             return;
         }
         let mut r = self.base_matrix.clone();
-        r.clear();
-        for (i, m) in self.model.mass.iter().enumerate() {
-            let k = r.diag_index(i);
-            r.values[k] = Mat3::from_diagonal(Vec3::splat(*m));
-        }
         let (x, v) = &self.initial;
-        for f in &self.forces {
-            f.add_jacobian(x, v, -h * h, -h, &mut r);
-        }
-        let pins = self
-            .model
-            .pinned
-            .iter()
-            .map(|&p| if p { Mat3::ZERO } else { Mat3::IDENTITY })
-            .collect();
+        assemble_base(&self.model.mass, &self.forces, x, v, h, &mut r);
+        let pins = self.model.pin_filter();
         let mg = self.pcg.multigrid();
         mg.params.strength = MULTIGRID_STRENGTH;
         mg.set_reference(r, pins);
@@ -364,15 +338,14 @@ impl Simulation {
     /// model's forces on the base pattern, then, with contacts, into the enlarged system
     /// matrix with the contact blocks added (and the preconditioner's matrix).
     fn assemble(&mut self, x: &[Vec3], v: &[Vec3], h: f64, contact: Option<&Repulsions>) {
-        let base = &mut self.base_matrix;
-        base.clear();
-        for (i, m) in self.model.mass.iter().enumerate() {
-            let k = base.diag_index(i);
-            base.values[k] = Mat3::from_diagonal(Vec3::splat(*m));
-        }
-        for f in &self.forces {
-            f.add_jacobian(x, v, -h * h, -h, base);
-        }
+        assemble_base(
+            &self.model.mass,
+            &self.forces,
+            x,
+            v,
+            h,
+            &mut self.base_matrix,
+        );
         let Some(c) = contact else {
             self.matrix.values.copy_from_slice(&self.base_matrix.values);
             return;
@@ -843,6 +816,25 @@ impl Simulation {
     fn restore(&mut self, x0: Vec<Vec3>, v0: Vec<Vec3>) {
         self.model.x = x0;
         self.model.v = v0;
+    }
+}
+
+/// `m = M - h D - h² K` of the mass and the model's `forces` at `(x, v)` (no contacts).
+fn assemble_base(
+    mass: &[f64],
+    forces: &[Box<dyn Force>],
+    x: &[Vec3],
+    v: &[Vec3],
+    h: f64,
+    m: &mut BlockMatrix,
+) {
+    m.clear();
+    for (i, mi) in mass.iter().enumerate() {
+        let k = m.diag_index(i);
+        m.values[k] = Mat3::from_diagonal(Vec3::splat(*mi));
+    }
+    for f in forces {
+        f.add_jacobian(x, v, -h * h, -h, m);
     }
 }
 

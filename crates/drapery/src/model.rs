@@ -4,7 +4,7 @@
 //! array, each cloth owning a contiguous range of it ([`ClothInfo`]).
 
 use crate::error::{Error, Result};
-use crate::math::Vec3;
+use crate::math::{Mat3, Vec3};
 use crate::mesh::Mesh;
 
 /// How particle masses are given.
@@ -355,6 +355,15 @@ impl Model {
     /// Number of particles.
     pub fn particle_count(&self) -> usize {
         self.x.len()
+    }
+
+    /// The velocity filter of the pins alone (MATH.md §5): `0` for a pinned particle, `I`
+    /// otherwise.
+    pub fn pin_filter(&self) -> Vec<Mat3> {
+        self.pinned
+            .iter()
+            .map(|&p| if p { Mat3::ZERO } else { Mat3::IDENTITY })
+            .collect()
     }
 
     /// Total mass, kg.

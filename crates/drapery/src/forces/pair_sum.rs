@@ -151,9 +151,7 @@ impl PairSums {
             .with_min_len(1024)
             .for_each(|(s, b)| *b = term(s));
         let terms = &st.mats;
-        let ptr = m.row_ptr().to_vec();
-        m.for_each_row_mut(|row, _, vals| {
-            let base = ptr[row] as usize;
+        m.for_each_row_mut(|_, base, _, vals| {
             for (k, v) in vals.iter_mut().enumerate() {
                 *v += lists.gather(base + k, terms, Mat3::ZERO);
             }

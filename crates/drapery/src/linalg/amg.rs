@@ -37,7 +37,6 @@ mod setup;
 
 use super::bsr::BlockMatrix;
 use crate::math::{Mat3, Vec3};
-use std::ops::Range;
 
 /// Tunables of the hierarchy and the cycle.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -263,27 +262,6 @@ impl Multigrid {
         }
         cycle::factor_coarsest(self);
     }
-}
-
-/// Splits `values`, laid out in rows by `ptr`, into chunks of about `rows` rows each, for
-/// row-parallel loops that write whole rows.
-fn row_chunks<'a, T>(
-    mut values: &'a mut [T],
-    ptr: &[u32],
-    rows: usize,
-) -> Vec<(Range<usize>, &'a mut [T])> {
-    let n = ptr.len() - 1;
-    let mut out = Vec::with_capacity(n.div_ceil(rows.max(1)));
-    let mut start = 0;
-    while start < n {
-        let end = (start + rows).min(n);
-        let len = (ptr[end] - ptr[start]) as usize;
-        let (head, tail) = values.split_at_mut(len);
-        out.push((start..end, head));
-        values = tail;
-        start = end;
-    }
-    out
 }
 
 /// `max_r Σ_c |m_rc|`, the infinity norm.

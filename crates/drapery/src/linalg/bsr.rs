@@ -7,6 +7,7 @@
 
 use crate::math::{Mat3, Vec3};
 use rayon::prelude::*;
+use std::ops::Range;
 use std::sync::Arc;
 
 /// Which blocks a [`BlockMatrix`] stores; shared (not copied) between clones, so that code
@@ -119,30 +120,22 @@ impl BlockMatrix {
         self.values[k] += m;
     }
 
-    /// Calls `f(i, columns, values)` on every block row `i` with its values, row-parallel
-    /// (each row is visited by one task, so `f` decides the order of its own sums).
+    /// Calls `f(i, first, columns, values)` on every block row `i` (`first`: the position in
+    /// [`BlockMatrix::values`] of the row's first block), row-parallel (each row is visited by
+    /// one task, so `f` decides the order of its own sums).
     pub fn for_each_row_mut<F>(&mut self, f: F)
     where
-        F: Fn(usize, &[u32], &mut [Mat3]) + Sync,
+        F: Fn(usize, usize, &[u32], &mut [Mat3]) + Sync,
     {
         let p = &*self.pattern;
-        let n = p.diag.len();
-        let mut chunks = Vec::with_capacity(n.div_ceil(ROWS));
-        let mut rest = &mut self.values[..];
-        let mut start = 0;
-        while start < n {
-            let end = (start + ROWS).min(n);
-            let (head, tail) = rest.split_at_mut((p.row_ptr[end] - p.row_ptr[start]) as usize);
-            chunks.push((start..end, head));
-            rest = tail;
-            start = end;
-        }
+        let chunks = row_chunks(&mut self.values, &p.row_ptr, ROWS);
         chunks.into_par_iter().for_each(|(rows, vals)| {
             let base = p.row_ptr[rows.start] as usize;
             for i in rows {
                 let r = p.row_ptr[i] as usize..p.row_ptr[i + 1] as usize;
                 f(
                     i,
+                    r.start,
                     &p.col[r.clone()],
                     &mut vals[r.start - base..r.end - base],
                 );
@@ -195,6 +188,27 @@ impl BlockMatrix {
         }
         worst
     }
+}
+
+/// Splits `values`, laid out in rows by `ptr`, into chunks of about `rows` rows each, for
+/// row-parallel loops that write whole rows.
+pub(crate) fn row_chunks<'a, T>(
+    mut values: &'a mut [T],
+    ptr: &[u32],
+    rows: usize,
+) -> Vec<(Range<usize>, &'a mut [T])> {
+    let n = ptr.len() - 1;
+    let mut out = Vec::with_capacity(n.div_ceil(rows.max(1)));
+    let mut start = 0;
+    while start < n {
+        let end = (start + rows).min(n);
+        let len = (ptr[end] - ptr[start]) as usize;
+        let (head, tail) = values.split_at_mut(len);
+        out.push((start..end, head));
+        values = tail;
+        start = end;
+    }
+    out
 }
 
 #[cfg(test)]

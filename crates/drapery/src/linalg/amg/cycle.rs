@@ -7,6 +7,7 @@
 //! keeps `ω ρ(D⁻¹A) < 2`.
 
 use super::{CoarseSolver, Level, Multigrid};
+use crate::linalg::bsr::BlockMatrix;
 use crate::math::{Mat3, Vec3};
 use rayon::prelude::*;
 
@@ -46,14 +47,7 @@ fn cycle(levels: &mut [Level], coarse: &CoarseSolver, sweeps: usize) {
         .par_iter_mut()
         .enumerate()
         .with_min_len(ROWS)
-        .for_each(|(i, wi)| {
-            let (cols, r) = a.row(i);
-            let mut acc = b[i];
-            for (c, m) in cols.iter().zip(&a.values[r]) {
-                acc -= *m * x[*c as usize];
-            }
-            *wi = acc;
-        });
+        .for_each(|(i, wi)| *wi = residual(a, x, b, i));
     // b_c = Pᵀ w
     let w = &lvl.w;
     next.b
@@ -107,16 +101,20 @@ fn smooth_more(lvl: &mut Level, sweeps: usize) {
             .par_iter_mut()
             .enumerate()
             .with_min_len(ROWS)
-            .for_each(|(i, wi)| {
-                let (cols, r) = a.row(i);
-                let mut acc = b[i];
-                for (c, m) in cols.iter().zip(&a.values[r]) {
-                    acc -= *m * x[*c as usize];
-                }
-                *wi = x[i] + omega * (dinv[i] * acc);
-            });
+            .for_each(|(i, wi)| *wi = x[i] + omega * (dinv[i] * residual(a, x, b, i)));
         std::mem::swap(&mut lvl.x, &mut lvl.w);
     }
+}
+
+/// Row `i` of `b - A x`.
+#[inline]
+fn residual(a: &BlockMatrix, x: &[Vec3], b: &[Vec3], i: usize) -> Vec3 {
+    let (cols, r) = a.row(i);
+    let mut acc = b[i];
+    for (c, m) in cols.iter().zip(&a.values[r]) {
+        acc -= *m * x[*c as usize];
+    }
+    acc
 }
 
 /// Factors the coarsest level's matrix densely (`None` if not positive definite).

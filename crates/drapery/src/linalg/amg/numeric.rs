@@ -2,8 +2,8 @@
 //! the filtered fine matrix, the smoothers, the smoothed prolongators and the Galerkin
 //! coarse operators. Every loop is row-parallel with a fixed order within each row.
 
-use super::{Level, Multigrid, NONE, Transfer, WEAK, cycle, norm_inf, row_chunks, safe_inverse};
-use crate::linalg::bsr::BlockMatrix;
+use super::{Level, Multigrid, NONE, Transfer, WEAK, cycle, norm_inf, safe_inverse};
+use crate::linalg::bsr::{BlockMatrix, row_chunks};
 use crate::math::Mat3;
 use rayon::prelude::*;
 
