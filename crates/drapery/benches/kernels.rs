@@ -1,5 +1,5 @@
 //! Kernel micro-benchmarks (divan) for regression tracking: assembly, block SpMV, one
-//! multigrid V-cycle, one PCG solve, the broad phase, and two memory-bandwidth references
+//! multigrid V-cycle, the multigrid's value refresh, one PCG solve, the broad phase, and two memory-bandwidth references
 //! (a read-only sum and a STREAM-style triad over arrays much larger than the caches) to
 //! compare the SpMV's bytes per second with. Run with `cargo bench --bench kernels`; the
 //! scenes are [`drapery::presets`].
@@ -63,6 +63,16 @@ fn vcycle(bencher: Bencher, n: usize) {
     let r: Vec<Vec3> = sim.model.v.iter().zip(&s).map(|(v, f)| *f * *v).collect();
     let mut out = vec![Vec3::ZERO; r.len()];
     bencher.bench_local(|| mg.apply(&s, divan::black_box(&r), &mut out));
+}
+
+/// Recomputing the multigrid's values for a matrix of the same pattern (done every solve).
+#[divan::bench(args = [64, 128, 256])]
+fn amg_values(bencher: Bencher, n: usize) {
+    let sim = hang(n);
+    let s = sim.model.pin_filter();
+    let mut mg = Multigrid::default();
+    mg.refresh(sim.matrix(), &s);
+    bencher.bench_local(|| mg.refresh(divan::black_box(sim.matrix()), &s));
 }
 
 #[divan::bench(args = [64, 128])]

@@ -155,10 +155,22 @@ pub struct Simulation {
     direct: DirectSolver,
 }
 
-/// Linear solves per Newton iteration at most: after each, obstacle contacts whose impulse
-/// pulls are released and the system solved again from the previous solution; contacts still
-/// pulling after the last round stay held for this step (and are re-examined at the next).
+/// Linear solves per Newton iteration at most. Obstacle contacts form an active set: before
+/// the first solve, a contact is released when the initial guess (the previous step's change
+/// of velocity) says it would pull and its particle would leave the surface anyway; after each
+/// solve, held contacts whose impulse pulls are released, released ones whose particle would
+/// sink below the prescribed normal velocity are held again, and the system is solved again
+/// from the previous solution. What the last round leaves stays for this step (and is
+/// re-examined at the next).
 const CONTACT_ROUNDS: usize = 2;
+
+/// Holds particle `c.particle` to the contact's normal velocity: filter `I - n nᵀ` and the
+/// prescribed normal part of the change of velocity from `v`.
+fn hold(c: &ObstacleContact, v: &[Vec3], filter: &mut [Mat3], z: &mut [Vec3]) {
+    let i = c.particle as usize;
+    filter[i] = Mat3::IDENTITY - outer(c.normal, c.normal);
+    z[i] = c.normal * (c.normal_velocity - c.normal.dot(v[i]));
+}
 
 /// Strength-of-connection threshold of the multigrid, applied to the system matrix at the
 /// initial state (see [`Simulation::reference`]).
@@ -462,7 +474,7 @@ impl Simulation {
         // Contacts found at the start of the step.
         let tc = Instant::now();
         let collision = self.model.collision;
-        let mut contacts: Vec<ObstacleContact> = match &collision {
+        let contacts: Vec<ObstacleContact> = match &collision {
             Some(c) => response::obstacle_contacts(
                 &x0,
                 &v0,
@@ -513,7 +525,13 @@ impl Simulation {
         for b in [&mut f, &mut rhs, &mut w, &mut z, &mut dv, &mut kw, &mut r] {
             b.resize(n, Vec3::ZERO);
         }
-        let mut impulse = vec![0.0; contacts.len()];
+        // Obstacle contacts found at the start of the step, and which of them are held.
+        let candidates = contacts;
+        let mut active = vec![true; candidates.len()];
+        let mut impulse = vec![0.0; candidates.len()];
+        // a released contact is held again when its solved normal velocity is below the
+        // prescribed one by more than this
+        let sink_tolerance = 1e-2 * self.model.gravity.length() * h;
         let newton = self.settings.newton_iterations;
         for it in 0..newton {
             let t0 = Instant::now();
@@ -536,7 +554,7 @@ impl Simulation {
             }
             report.assembly_seconds += t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
-            // Solve; drop obstacle contacts that would pull (adhesive impulse) and solve again.
+            // Solve on an active set of the obstacle contacts (see `CONTACT_ROUNDS`).
             for round in 0..CONTACT_ROUNDS {
                 for i in 0..n {
                     z[i] = if self.model.pinned[i] {
@@ -550,7 +568,7 @@ impl Simulation {
                         Mat3::IDENTITY
                     };
                     // initial guess: the previous step's change, then the previous round's
-                    // solution (only the released contacts differ)
+                    // solution (only the contacts that changed differ)
                     if round == 0 {
                         dv[i] = if it == 0 {
                             self.warm_start.get(i).copied().unwrap_or(Vec3::ZERO)
@@ -559,10 +577,26 @@ impl Simulation {
                         };
                     }
                 }
-                for c in &contacts {
-                    let i = c.particle as usize;
-                    self.filter[i] = Mat3::IDENTITY - outer(c.normal, c.normal);
-                    z[i] = c.normal * (c.normal_velocity - c.normal.dot(v[i]));
+                for (c, _) in candidates.iter().zip(&active).filter(|(_, a)| **a) {
+                    hold(c, &v, &mut self.filter, &mut z);
+                }
+                if round == 0 && it == 0 && !candidates.is_empty() {
+                    // predict from the guess which contacts would pull, and release those
+                    // whose guessed velocity leaves the surface
+                    for i in 0..n {
+                        w[i] = z[i] + self.filter[i] * dv[i];
+                    }
+                    self.matrix.mul_vec(&w, &mut r);
+                    for (c, a) in candidates.iter().zip(active.iter_mut()) {
+                        let i = c.particle as usize;
+                        let pulls = c.normal.dot(r[i] - rhs[i]) < 0.0;
+                        let leaves = c.normal.dot(v[i] + dv[i]) >= c.normal_velocity;
+                        if pulls && leaves {
+                            *a = false;
+                            self.filter[i] = Mat3::IDENTITY;
+                            z[i] = Vec3::ZERO;
+                        }
+                    }
                 }
                 report.linear_solves += 1;
                 if let Err(e) =
@@ -571,29 +605,41 @@ impl Simulation {
                     self.restore(x0, v0);
                     return Err(e);
                 }
-                if contacts.is_empty() {
+                if candidates.is_empty() {
                     break;
                 }
                 self.matrix.mul_vec(&dv, &mut r);
-                impulse = contacts
-                    .iter()
-                    .map(|c| {
-                        c.normal
-                            .dot(r[c.particle as usize] - rhs[c.particle as usize])
-                    })
-                    .collect();
+                for (c, l) in candidates.iter().zip(impulse.iter_mut()) {
+                    let i = c.particle as usize;
+                    *l = c.normal.dot(r[i] - rhs[i]);
+                }
                 // The last round keeps the contact set its solve used, so the contact list
                 // below (normal reset, friction) matches the velocities it comes with.
-                let scale = impulse.iter().fold(0.0f64, |m, l| m.max(l.abs()));
-                if round + 1 == CONTACT_ROUNDS || impulse.iter().all(|&l| l >= -1e-9 * scale) {
+                if round + 1 == CONTACT_ROUNDS {
                     break;
                 }
-                (contacts, impulse) = contacts
+                let scale = candidates
                     .iter()
                     .zip(&impulse)
-                    .filter(|&(_, &l)| l >= -1e-9 * scale)
-                    .map(|(c, &l)| (*c, l))
-                    .unzip();
+                    .zip(&active)
+                    .filter(|(_, a)| **a)
+                    .fold(0.0f64, |m, ((_, l), _)| m.max(l.abs()));
+                let mut changed = false;
+                for ((c, l), a) in candidates.iter().zip(&impulse).zip(active.iter_mut()) {
+                    let i = c.particle as usize;
+                    let flip = if *a {
+                        *l < -1e-9 * scale
+                    } else {
+                        c.normal.dot(v[i] + dv[i]) < c.normal_velocity - sink_tolerance
+                    };
+                    if flip {
+                        *a = !*a;
+                        changed = true;
+                    }
+                }
+                if !changed {
+                    break;
+                }
             }
             report.solve_seconds += t1.elapsed().as_secs_f64();
             report.newton_iterations = it + 1;
@@ -642,6 +688,13 @@ impl Simulation {
                 break;
             }
         }
+        let (contacts, impulse): (Vec<ObstacleContact>, Vec<f64>) = candidates
+            .iter()
+            .zip(&impulse)
+            .zip(&active)
+            .filter(|(_, a)| **a)
+            .map(|((c, l), _)| (*c, *l))
+            .unzip();
         report.obstacle_contacts = contacts.len();
 
         // Friction, then the fail-safe: nothing crosses anything over the step.

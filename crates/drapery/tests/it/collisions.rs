@@ -46,6 +46,17 @@ fn sim(
     .unwrap()
 }
 
+/// The plane y = 0 with Coulomb coefficient `friction`.
+fn ground(friction: f64) -> Obstacle {
+    Obstacle {
+        collider: Collider::fixed(Shape::Plane {
+            point: Vec3::ZERO,
+            normal: Vec3::Y,
+        }),
+        friction,
+    }
+}
+
 fn colliders(s: &Simulation) -> Vec<Collider> {
     s.model
         .obstacles
@@ -149,13 +160,7 @@ fn a_fast_sheet_does_not_tunnel_through_a_zero_thickness_plate() {
 
 #[test]
 fn a_sheet_falling_on_the_ground_piles_up_without_intersecting_itself() {
-    let ground = Obstacle {
-        collider: Collider::fixed(Shape::Plane {
-            point: Vec3::ZERO,
-            normal: Vec3::Y,
-        }),
-        friction: 0.5,
-    };
+    let ground = ground(0.5);
     // a sheet held almost upright, thrown sideways at the floor: its foot stops, the rest folds over it
     let mut s = sim(
         vec![sheet(
@@ -275,13 +280,7 @@ fn a_spinning_sphere_drags_the_sheet_around_by_friction() {
 
 #[test]
 fn a_particle_moving_away_from_an_obstacle_is_not_held_by_it() {
-    let ground = Obstacle {
-        collider: Collider::fixed(Shape::Plane {
-            point: Vec3::ZERO,
-            normal: Vec3::Y,
-        }),
-        friction: 1.0,
-    };
+    let ground = ground(1.0);
     let mut s = sim(
         vec![sheet(
             "sheet",
@@ -407,4 +406,45 @@ fn a_mesh_spinning_about_the_origin_of_its_file_carries_the_sheet_around_it() {
         centre.with_y(0.0).length()
     );
     assert!(centre.y > 0.0 && centre.y < 0.02, "height {}", centre.y);
+}
+
+#[test]
+fn a_sheet_resting_on_the_ground_under_upward_gravity_lifts_off_freely_in_one_solve() {
+    // Every contact would pull: the guess (no change of velocity) already says so, so the
+    // active set releases them all before the first solve, and the sheet accelerates as if
+    // the ground were not there.
+    let ground = ground(0.5);
+    let thickness = 0.01;
+    let mut cloth = sheet(
+        "sheet",
+        6,
+        0.3,
+        Vec3::new(0.0, thickness, 0.0),
+        Vec3::Y,
+        Vec3::ZERO,
+    );
+    cloth.material.air_drag = 0.0;
+    let mut model = Model::new(vec![cloth], Vec3::new(0.0, 9.81, 0.0)).unwrap();
+    model.collision = Some(CollisionSettings {
+        thickness,
+        ..Default::default()
+    });
+    model.obstacles = vec![ground];
+    let mut s = Simulation::new(
+        model,
+        SolverSettings {
+            tolerance: 1e-8,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let h = 0.01;
+    let r = s.step(h).unwrap();
+    assert_eq!(r.linear_solves, 1);
+    assert_eq!(r.obstacle_contacts, 0);
+    for (p, v) in s.model.x.iter().zip(&s.model.v) {
+        // free fall upward: v = g h, y = thickness + g h² (the flat sheet has no internal force)
+        assert!((v.y - 9.81 * h).abs() < 1e-6, "{v}");
+        assert!((p.y - (thickness + 9.81 * h * h)).abs() < 1e-8, "{p}");
+    }
 }
