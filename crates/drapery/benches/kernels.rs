@@ -21,6 +21,14 @@ fn main() {
     divan::main();
 }
 
+/// Runs `f` on a worker of rayon's pool, as [`Simulation::step`] does, so that the parallel
+/// loops inside fork from within the pool.
+fn in_pool<T: Send>(f: impl FnOnce() -> T + Send) -> T {
+    let mut out = None;
+    rayon::scope(|_| out = Some(f()));
+    out.expect("ran")
+}
+
 /// The hanging cloth after a few steps, with its matrix assembled at that state.
 fn hang(n: usize) -> Simulation {
     let mut sim = Preset::Hang.simulation(n, 1e-3).unwrap();
@@ -51,7 +59,7 @@ fn spmv(bencher: Bencher, n: usize) {
     let mut y = vec![Vec3::ZERO; a.n()];
     bencher
         .counter(BytesCount::new(spmv_bytes(a)))
-        .bench_local(|| a.mul_vec(divan::black_box(&x), &mut y));
+        .bench_local(|| in_pool(|| a.mul_vec(divan::black_box(&x), &mut y)));
 }
 
 #[divan::bench(args = [64, 128, 256])]
@@ -62,7 +70,7 @@ fn vcycle(bencher: Bencher, n: usize) {
     mg.refresh(sim.matrix(), &s);
     let r: Vec<Vec3> = sim.model.v.iter().zip(&s).map(|(v, f)| *f * *v).collect();
     let mut out = vec![Vec3::ZERO; r.len()];
-    bencher.bench_local(|| mg.apply(&s, divan::black_box(&r), &mut out));
+    bencher.bench_local(|| in_pool(|| mg.apply(&s, divan::black_box(&r), &mut out)));
 }
 
 /// Recomputing the multigrid's values for a matrix of the same pattern (done every solve).
@@ -95,9 +103,11 @@ fn pcg_solve(bencher: Bencher, n: usize) {
     let mut w = PcgScratch::default();
     let mut x = vec![Vec3::ZERO; b.len()];
     bencher.bench_local(|| {
-        x.iter_mut().for_each(|e| *e = Vec3::ZERO);
-        let stats = pcg::solve(a, &b, &s, &z, &mut x, &settings, &mut w);
-        assert!(stats.converged);
+        in_pool(|| {
+            x.iter_mut().for_each(|e| *e = Vec3::ZERO);
+            let stats = pcg::solve(a, &b, &s, &z, &mut x, &settings, &mut w);
+            assert!(stats.converged);
+        })
     });
 }
 

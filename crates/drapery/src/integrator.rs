@@ -842,6 +842,8 @@ impl Simulation {
                 if !stats.converged {
                     let why = if stats.indefinite {
                         "the system matrix is not positive definite"
+                    } else if stats.bad_preconditioner {
+                        "the multigrid preconditioner is not positive definite"
                     } else {
                         "conjugate gradient did not converge"
                     };

@@ -639,7 +639,12 @@ mod tests {
             let toi = vertex_triangle_toi(&a, &b, TOL);
             prop_assert!(toi.is_some(), "missed: tstar={tstar}");
             let t = toi.unwrap();
-            prop_assert!(t <= tstar + 1e-9, "t={t} tstar={tstar}");
+            // the crossing time is known to the rounding of the positions (~1e-14 for this
+            // unit-sized set-up) over the speed across the plane: a grazing pass (a normal
+            // speed of 2e-8 m/s was found) pins it down only loosely
+            let normal = (x[1] - x[0]).cross(x[2] - x[0]).normalize();
+            let across = (v - (t1[0] - t0[0])).dot(normal).abs();
+            prop_assert!(t <= tstar + 1e-9 + 1e-14 / across, "t={t} tstar={tstar}");
             let d = distance_at(Kind::VertexTriangle, &a, &b, t);
             prop_assert!(d <= TOL + 1e-11 * (1.0 + v.length()), "d={d} at t={t}");
         }

@@ -148,14 +148,18 @@ impl BlockMatrix {
         y.par_iter_mut()
             .enumerate()
             .with_min_len(ROWS)
-            .for_each(|(i, yi)| {
-                let (cols, r) = self.row(i);
-                let mut acc = Vec3::ZERO;
-                for (c, m) in cols.iter().zip(&self.values[r]) {
-                    acc += *m * x[*c as usize];
-                }
-                *yi = acc;
-            });
+            .for_each(|(i, yi)| *yi = self.row_product(i, x));
+    }
+
+    /// Row `i` of `A x`.
+    #[inline]
+    pub fn row_product(&self, i: usize, x: &[Vec3]) -> Vec3 {
+        let (cols, r) = self.row(i);
+        let mut acc = Vec3::ZERO;
+        for (c, m) in cols.iter().zip(&self.values[r]) {
+            acc += *m * x[*c as usize];
+        }
+        acc
     }
 
     /// Dense copy (tests and small debugging only).

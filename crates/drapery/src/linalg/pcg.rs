@@ -10,7 +10,7 @@
 
 use super::amg::Multigrid;
 use super::bsr::BlockMatrix;
-use super::vector::{axpy, dot};
+use super::vector::{CHUNK, chunked_sum, chunked_sum2, dot};
 use crate::math::{Mat3, Vec3};
 use rayon::prelude::*;
 
@@ -50,6 +50,8 @@ pub struct SolveStats {
     pub converged: bool,
     /// Set when `cᵀ A c ≤ 0` was met: the filtered matrix is not positive definite.
     pub indefinite: bool,
+    /// Set when `rᵀ P⁻¹ r ≤ 0` was met: the preconditioner is not positive definite.
+    pub bad_preconditioner: bool,
 }
 
 /// Reusable work vectors.
@@ -59,6 +61,8 @@ pub struct PcgScratch {
     c: Vec<Vec3>,
     q: Vec<Vec3>,
     s: Vec<Vec3>,
+    /// Chunk sums of the fused reductions.
+    partial: Vec<f64>,
     pinv: Vec<Mat3>,
     amg: Multigrid,
 }
@@ -69,13 +73,6 @@ impl PcgScratch {
     pub fn multigrid(&mut self) -> &mut Multigrid {
         &mut self.amg
     }
-}
-
-fn filter(s: &[Mat3], v: &mut [Vec3]) {
-    v.par_iter_mut()
-        .zip(s.par_iter())
-        .with_min_len(1024)
-        .for_each(|(vi, si)| *vi = *si * *vi);
 }
 
 fn precondition(
@@ -170,7 +167,7 @@ pub fn solve_preconditioned_by(
             iterations: 0,
             relative_residual: if r0 == 0.0 { 0.0 } else { f64::NAN },
             converged: r0 == 0.0,
-            indefinite: false,
+            ..SolveStats::default()
         };
     }
     a.mul_vec(x, &mut w.q);
@@ -182,30 +179,65 @@ pub fn solve_preconditioned_by(
     let target = settings.tolerance * r0;
     let mut stats = SolveStats::default();
     let mut rnorm = dot(&w.r, &w.r).sqrt();
+    let rinit = rnorm;
     while stats.iterations < settings.max_iterations {
         if rnorm <= target {
             break;
         }
-        a.mul_vec(&w.c, &mut w.q);
-        filter(s, &mut w.q);
-        let cq = dot(&w.c, &w.q);
+        // q = S A c and cᵀq in one pass
+        let cq = {
+            let c = &w.c;
+            chunked_sum(&mut w.q, &mut w.partial, |first, q| {
+                let mut acc = 0.0;
+                for (k, qi) in q.iter_mut().enumerate() {
+                    let i = first + k;
+                    *qi = s[i] * a.row_product(i, c);
+                    acc += c[i].dot(*qi);
+                }
+                acc
+            })
+        };
         if !(cq > 0.0) {
             stats.indefinite = true;
             break;
         }
         let alpha = delta / cq;
-        axpy(alpha, &w.c, x);
-        axpy(-alpha, &w.q, &mut w.r);
-        precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.s);
-        let delta_new = dot(&w.r, &w.s);
+        // x += α c, r -= α q and rᵀr in one pass
+        let rr = {
+            let (c, q) = (&w.c, &w.q);
+            chunked_sum2(x, &mut w.r, &mut w.partial, |first, x, r| {
+                let mut acc = 0.0;
+                for (k, (xi, ri)) in x.iter_mut().zip(r.iter_mut()).enumerate() {
+                    let i = first + k;
+                    *xi += alpha * c[i];
+                    *ri -= alpha * q[i];
+                    acc += ri.dot(*ri);
+                }
+                acc
+            })
+        };
+        let delta_new = if multigrid {
+            w.amg.apply_dot(s, &w.r, &mut w.s)
+        } else {
+            precondition(None, &w.pinv, s, &w.r, &mut w.s);
+            dot(&w.r, &w.s)
+        };
+        stats.iterations += 1;
+        rnorm = rr.sqrt();
+        if !(delta_new > 0.0) && rnorm > target {
+            // rᵀ P⁻¹ r ≤ 0 for r ≠ 0: the preconditioner is not positive definite
+            stats.bad_preconditioner = true;
+            break;
+        }
         let beta = delta_new / delta;
         delta = delta_new;
         w.c.par_iter_mut()
             .zip(w.s.par_iter())
-            .with_min_len(1024)
+            .with_min_len(CHUNK)
             .for_each(|(c, si)| *c = *si + beta * *c);
-        stats.iterations += 1;
-        rnorm = dot(&w.r, &w.r).sqrt();
+    }
+    if std::env::var("DR_DBG").is_ok() {
+        eprintln!("init {:.3e} iters {}", rinit / r0, stats.iterations);
     }
     stats.relative_residual = rnorm / r0;
     stats.converged = rnorm <= target && rnorm.is_finite();

@@ -24,6 +24,40 @@ pub fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
     partial.iter().sum()
 }
 
+/// Runs `f(first, chunk)` on the fixed chunks of [`CHUNK`] items of `y` (in parallel, `first`
+/// the index of the chunk's first item) and returns the sum of the results, added in chunk
+/// order: a fused loop-and-reduction that gives the same bits on any number of threads.
+/// `partial` is scratch memory (resized as needed).
+pub fn chunked_sum<T: Send>(
+    y: &mut [T],
+    partial: &mut Vec<f64>,
+    f: impl Fn(usize, &mut [T]) -> f64 + Sync,
+) -> f64 {
+    // a Vec of () does not allocate
+    let mut none = vec![(); y.len()];
+    chunked_sum2(y, &mut none, partial, |first, a, _| f(first, a))
+}
+
+/// [`chunked_sum`] over the matching chunks of two slices of the same length.
+pub fn chunked_sum2<A: Send, B: Send>(
+    a: &mut [A],
+    b: &mut [B],
+    partial: &mut Vec<f64>,
+    f: impl Fn(usize, &mut [A], &mut [B]) -> f64 + Sync,
+) -> f64 {
+    assert_eq!(a.len(), b.len());
+    if a.len() <= CHUNK {
+        return 0.0 + f(0, a, b);
+    }
+    partial.resize(a.len().div_ceil(CHUNK), 0.0);
+    a.par_chunks_mut(CHUNK)
+        .zip(b.par_chunks_mut(CHUNK))
+        .zip(partial.par_iter_mut())
+        .enumerate()
+        .for_each(|(k, ((ca, cb), p))| *p = f(k * CHUNK, ca, cb));
+    partial.iter().sum()
+}
+
 /// `‖a‖₂`.
 pub fn norm(a: &[Vec3]) -> f64 {
     dot(a, a).sqrt()

@@ -8,23 +8,37 @@
 
 use super::{CoarseSolver, Level, Multigrid};
 use crate::linalg::bsr::BlockMatrix;
+use crate::linalg::vector::chunked_sum;
 use crate::math::{Mat3, Vec3};
 use rayon::prelude::*;
 
 /// Rows per parallel task.
 const ROWS: usize = 256;
+/// Levels with fewer rows run on one thread: their loops are shorter than the cost of
+/// handing work to another.
+const SEQUENTIAL: usize = 256;
 
-/// `out = S V(r)`.
-pub(super) fn apply(mg: &mut Multigrid, s: &[Mat3], r: &[Vec3], out: &mut [Vec3]) {
+/// Minimum rows per task for a loop over `n` rows.
+fn min_len(n: usize) -> usize {
+    if n < SEQUENTIAL { usize::MAX } else { ROWS }
+}
+
+/// `out = S V(r)`; returns `rᵀ out` (a deterministic chunked sum).
+pub(super) fn apply(mg: &mut Multigrid, s: &[Mat3], r: &[Vec3], out: &mut [Vec3]) -> f64 {
     let sweeps = mg.params.sweeps;
     let fine = &mut mg.levels[0];
     fine.b.copy_from_slice(r);
     cycle(&mut mg.levels, &mg.coarse, sweeps);
     let x = &mg.levels[0].x;
-    out.par_iter_mut()
-        .zip(x.par_iter().zip(s.par_iter()))
-        .with_min_len(1024)
-        .for_each(|(o, (xi, si))| *o = *si * *xi);
+    chunked_sum(out, &mut mg.partial, |first, out| {
+        let mut acc = 0.0;
+        for (k, o) in out.iter_mut().enumerate() {
+            let i = first + k;
+            *o = s[i] * x[i];
+            acc += r[i].dot(*o);
+        }
+        acc
+    })
 }
 
 /// One V-cycle from `levels[0]` down: reads `levels[0].b`, writes `levels[0].x`.
@@ -43,21 +57,24 @@ fn cycle(levels: &mut [Level], coarse: &CoarseSolver, sweeps: usize) {
     smooth(lvl, sweeps);
     // w = b - A x
     let (a, x, b) = (&lvl.a, &lvl.x, &lvl.b);
+    let rows = min_len(a.n());
     lvl.w
         .par_iter_mut()
         .enumerate()
-        .with_min_len(ROWS)
+        .with_min_len(rows)
         .for_each(|(i, wi)| *wi = residual(a, x, b, i));
     // b_c = Pᵀ w
     let w = &lvl.w;
     next.b
         .par_iter_mut()
         .enumerate()
-        .with_min_len(ROWS / 4)
+        .with_min_len(rows / 4)
         .for_each(|(c, bc)| {
             let mut acc = Vec3::ZERO;
             for e in t.pt_ptr[c] as usize..t.pt_ptr[c + 1] as usize {
-                acc += t.p[t.pt_src[e] as usize].transpose() * w[t.pt_row[e] as usize];
+                // Pᵀ w: the columns of the block dotted with w
+                let (m, wi) = (&t.p[t.pt_src[e] as usize], w[t.pt_row[e] as usize]);
+                acc += Vec3::new(m.x_axis.dot(wi), m.y_axis.dot(wi), m.z_axis.dot(wi));
             }
             *bc = acc;
         });
@@ -67,7 +84,7 @@ fn cycle(levels: &mut [Level], coarse: &CoarseSolver, sweeps: usize) {
     lvl.x
         .par_iter_mut()
         .enumerate()
-        .with_min_len(ROWS)
+        .with_min_len(rows)
         .for_each(|(i, xi)| {
             let r = t.p_ptr[i] as usize..t.p_ptr[i + 1] as usize;
             for (c, m) in t.p_col[r.clone()].iter().zip(&t.p[r]) {
@@ -88,7 +105,7 @@ fn smooth(lvl: &mut Level, sweeps: usize) {
     lvl.x
         .par_iter_mut()
         .enumerate()
-        .with_min_len(1024)
+        .with_min_len(min_len(b.len()).max(1024))
         .for_each(|(i, xi)| *xi = omega * (dinv[i] * b[i]));
     smooth_more(lvl, sweeps - 1);
 }
@@ -100,7 +117,7 @@ fn smooth_more(lvl: &mut Level, sweeps: usize) {
         lvl.w
             .par_iter_mut()
             .enumerate()
-            .with_min_len(ROWS)
+            .with_min_len(min_len(b.len()))
             .for_each(|(i, wi)| *wi = x[i] + omega * (dinv[i] * residual(a, x, b, i)));
         std::mem::swap(&mut lvl.x, &mut lvl.w);
     }

@@ -92,6 +92,53 @@ fn the_v_cycle_is_symmetric_and_positive_definite() {
     }
 }
 
+/// `ρ(D⁻¹A)` of a level by 3000 power steps on the symmetric `D^{-1/2} A D^{-1/2}` (through
+/// `D⁻¹A`, which is similar to it) from a random start, as the growth of the iterate's
+/// D-norm.
+fn spectral_radius(l: &Level) -> f64 {
+    let (a, n) = (&l.a, l.a.n());
+    let mut rng = Rng(11);
+    let mut x = rng.vecs(n);
+    let mut y = vec![Vec3::ZERO; n];
+    let dnorm = |v: &[Vec3]| -> f64 {
+        (0..n)
+            .map(|i| v[i].dot(a.values[a.diag_index(i)] * v[i]))
+            .sum::<f64>()
+            .sqrt()
+    };
+    let mut rho = 0.0;
+    for _ in 0..3000 {
+        a.mul_vec(&x, &mut y);
+        for i in 0..n {
+            y[i] = a.values[a.diag_index(i)].inverse() * y[i];
+        }
+        let (nx, ny) = (dnorm(&x), dnorm(&y));
+        rho = ny / nx;
+        x.iter_mut().zip(&y).for_each(|(xi, yi)| *xi = *yi / ny);
+    }
+    rho
+}
+
+#[test]
+fn the_smoother_damping_is_set_by_the_spectral_radius_on_every_level() {
+    // ω = weight / ρ̄ with ρ̄ ≤ ρ (a Rayleigh quotient), and close to it: ω ρ lies between the
+    // weight and 2, so the smoother damps hard and the cycle stays positive definite
+    let a = cloth_matrix(32, 3);
+    let s = mixed_filter(a.n(), 32);
+    let mut mg = Multigrid::default();
+    mg.refresh(&a, &s);
+    let weight = mg.params.smoother_weight;
+    for (k, l) in mg.levels.iter().enumerate() {
+        let rho = spectral_radius(l);
+        let wr = l.omega * rho;
+        assert!(
+            wr >= weight * (1.0 - 1e-6) && wr <= weight / 0.9 && wr < 2.0,
+            "level {k} ({} rows): ω ρ = {wr}, ρ = {rho}",
+            l.a.n()
+        );
+    }
+}
+
 #[test]
 fn refreshing_the_values_equals_building_afresh() {
     let a1 = cloth_matrix(24, 1);
