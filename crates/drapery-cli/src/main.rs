@@ -10,10 +10,12 @@ use std::process::ExitCode;
 mod bench;
 mod check;
 mod colliders;
+mod formats;
 mod render;
 mod run;
 mod state;
 mod validate;
+mod writer;
 
 /// Implicit mass-spring cloth simulation (Baraff & Witkin 1998).
 #[derive(Parser)]

@@ -2,23 +2,22 @@
 //!
 //! Everything (formats, scene, meshes, model) is checked before the output folder is created.
 //! Frame `k` is the state at `k / frame_rate`, from frame 0 (the initial state) to the frame at
-//! `duration`. Output goes through [`FrameWriter`]s: a per-frame format writes a file in
-//! [`FrameWriter::frame`]; a whole-run format keeps what it needs in memory and writes in
-//! [`FrameWriter::finish`]. Adding a format is one `Format` variant and one writer.
+//! `duration`. Output goes through the writers of [`crate::formats`]: per-frame formats (obj,
+//! ply) are written on the writer thread ([`crate::writer`]) while the next frame is stepped;
+//! whole-run formats (glb, usd) are written at the end.
 //!
-//! After each frame the run state is saved (see [`crate::state`]) so that `--resume` continues
-//! a killed run to the same bits; a folder holding another run is refused unless `--overwrite`.
+//! For each frame the writer thread writes the frame's files, then (for whole-run formats) appends
+//! its positions to the history, then saves the run state (see [`crate::state`]), in that order,
+//! so the state on disk never claims a frame whose files are not written and `--resume`
+//! continues a killed run to the same bits. A folder holding another run is refused unless
+//! `--overwrite`.
 
+use crate::formats::{Format, FrameWriter, writer_for};
 use crate::state::{HISTORY_FILE, History, RunState, STATE_FILE, fingerprint};
+use crate::writer::{Sink, Writer};
 use anyhow::{Context, Result, anyhow, bail};
-use clap::{Args, ValueEnum};
-use drapery::Model;
-use drapery::Vec3;
-use drapery::collision::settings::Obstacle;
-use drapery::io::gltf::{StaticMesh, write_glb_with};
-use drapery::io::obj::write_obj;
-use drapery::io::ply::write_ply;
-use drapery::io::usd::write_usda;
+use clap::Args;
+use drapery::model::ClothInfo;
 use drapery::scene::Scene;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -66,117 +65,6 @@ pub struct RunArgs {
     pub stop_after_frames: Option<usize>,
 }
 
-/// Output formats.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, ValueEnum)]
-pub enum Format {
-    /// Wavefront OBJ, one file per frame.
-    Obj,
-    /// glTF binary with morph targets, one file per run: DIR/<scene stem>.glb.
-    Glb,
-    /// USD ASCII point cache, one file per run: DIR/<scene stem>.usda.
-    Usd,
-    /// Binary little-endian PLY (f64 positions), one file per frame: DIR/frame_00000.ply, ….
-    Ply,
-}
-
-impl Format {
-    fn extension(self) -> &'static str {
-        match self {
-            Format::Usd => "usda",
-            other => other.name(),
-        }
-    }
-
-    fn name(self) -> &'static str {
-        match self {
-            Format::Obj => "obj",
-            Format::Glb => "glb",
-            Format::Usd => "usd",
-            Format::Ply => "ply",
-        }
-    }
-}
-
-/// A sink for frames.
-pub trait FrameWriter {
-    /// Frame `k` (0-based; frame 0 is the initial state).
-    fn frame(&mut self, _k: usize, _model: &Model) -> drapery::Result<()> {
-        Ok(())
-    }
-    /// True for whole-run formats: the run then keeps every frame's positions in memory and
-    /// hands them to [`FrameWriter::finish`].
-    fn whole_run(&self) -> bool {
-        false
-    }
-    /// Called once at the end with the positions of frames `0..frames.len()` (empty unless some
-    /// writer is [`FrameWriter::whole_run`]); also after a failed step, with the frames done.
-    fn finish(&mut self, _model: &Model, _frames: &[Vec<Vec3>]) -> drapery::Result<()> {
-        Ok(())
-    }
-}
-
-/// `DIR/frame_NNNNN.obj`, one per frame, each written atomically.
-struct ObjFrames {
-    dir: PathBuf,
-}
-
-impl FrameWriter for ObjFrames {
-    fn frame(&mut self, k: usize, model: &Model) -> drapery::Result<()> {
-        write_obj(&frame_path(&self.dir, k, "obj"), &model.cloths, &model.x)
-    }
-}
-
-/// `DIR/frame_NNNNN.ply`, one binary PLY per frame, each written atomically.
-struct PlyFrames {
-    dir: PathBuf,
-}
-
-impl FrameWriter for PlyFrames {
-    fn frame(&mut self, k: usize, model: &Model) -> drapery::Result<()> {
-        write_ply(&frame_path(&self.dir, k, "ply"), &model.cloths, &model.x)
-    }
-}
-
-/// `DIR/<stem>.glb` or `DIR/<stem>.usda`, written once at the end from every frame. The glb
-/// also holds the colliders, as static meshes in their pose at frame 0.
-struct WholeRun {
-    format: Format,
-    path: PathBuf,
-    frame_rate: f64,
-    obstacles: Vec<Obstacle>,
-}
-
-impl FrameWriter for WholeRun {
-    fn whole_run(&self) -> bool {
-        true
-    }
-    fn finish(&mut self, model: &Model, frames: &[Vec<Vec3>]) -> drapery::Result<()> {
-        match self.format {
-            Format::Glb => {
-                let bounds = frames
-                    .first()
-                    .and_then(|x| drapery::render::bounds(x.iter()));
-                let meshes = crate::colliders::collider_meshes(&self.obstacles, 0.0, bounds);
-                let extra: Vec<StaticMesh<'_>> = meshes
-                    .iter()
-                    .map(|m| StaticMesh {
-                        name: &m.name,
-                        positions: &m.positions,
-                        triangles: &m.triangles,
-                    })
-                    .collect();
-                write_glb_with(&self.path, &model.cloths, frames, self.frame_rate, &extra)
-            }
-            _ => write_usda(&self.path, &model.cloths, frames, self.frame_rate),
-        }
-    }
-}
-
-/// `DIR/frame_00007.EXT`.
-pub fn frame_path(dir: &Path, k: usize, ext: &str) -> PathBuf {
-    dir.join(format!("frame_{k:05}.{ext}"))
-}
-
 /// The file name stem of whole-run outputs: the scene file's stem (`hang` for `hang.toml`).
 fn run_stem(scene: &Path) -> String {
     scene
@@ -184,27 +72,6 @@ fn run_stem(scene: &Path) -> String {
         .map(|s| s.to_string_lossy().into_owned())
         .filter(|s| !s.is_empty())
         .unwrap_or_else(|| "drapery".into())
-}
-
-/// The writer of one format.
-fn writer_for(
-    format: Format,
-    dir: &Path,
-    stem: &str,
-    frame_rate: f64,
-    obstacles: &[Obstacle],
-) -> Box<dyn FrameWriter> {
-    let dir = dir.to_path_buf();
-    match format {
-        Format::Obj => Box::new(ObjFrames { dir }),
-        Format::Ply => Box::new(PlyFrames { dir }),
-        Format::Glb | Format::Usd => Box::new(WholeRun {
-            format,
-            path: dir.join(format!("{stem}.{}", format.extension())),
-            frame_rate,
-            obstacles: obstacles.to_vec(),
-        }),
-    }
 }
 
 /// True for `frame_<digits>.obj` / `.ply` and for the temporary files of atomic writes of those.
@@ -310,6 +177,28 @@ fn plan_start(args: &RunArgs, fp: u64, formats: &str, n: usize, frames: usize) -
     }
 }
 
+/// What the writer thread does for each frame of a run: the per-frame files, the history (for
+/// whole-run formats), then the state, which names the frame.
+struct RunOutput {
+    dir: PathBuf,
+    cloths: Vec<ClothInfo>,
+    writers: Vec<Box<dyn FrameWriter>>,
+    history: History,
+}
+
+impl Sink for RunOutput {
+    /// The state after the frame; its positions are the frame's.
+    type Job = RunState;
+
+    fn write(&mut self, state: RunState) -> Result<()> {
+        for w in self.writers.iter_mut() {
+            w.frame(state.frame as usize, &self.cloths, &state.x)?;
+        }
+        self.history.push(&state.x)?;
+        state.save(&self.dir)
+    }
+}
+
 /// Runs a scene.
 pub fn run(args: RunArgs) -> Result<()> {
     // Canonical order (obj, glb, usd, ply), so that `glb,obj` resumes a run of `obj,glb`.
@@ -343,12 +232,12 @@ pub fn run(args: RunArgs) -> Result<()> {
     if args.overwrite {
         clear_run(dir, &stem)?;
     }
-    let mut writers: Vec<Box<dyn FrameWriter>> = formats
+    let (mut whole_run, per_frame): (Vec<Box<dyn FrameWriter>>, Vec<_>) = formats
         .iter()
         .map(|&f| writer_for(f, dir, &stem, scene.frame_rate, &scene.obstacles))
-        .collect();
-    let keep_history = writers.iter().any(|w| w.whole_run());
-    let (first, mut history) = match begin {
+        .partition(|w| w.whole_run());
+    let keep_history = !whole_run.is_empty();
+    let (first, history) = match begin {
         Start::Fresh => (
             0,
             if keep_history {
@@ -372,19 +261,16 @@ pub fn run(args: RunArgs) -> Result<()> {
             (k + 1, h)
         }
     };
-    let save_state = |k: usize, sim: &drapery::Simulation| -> Result<()> {
-        RunState {
-            fingerprint: fp,
-            frame: k as u64,
-            steps: sim.steps,
-            time: sim.time,
-            formats: format_list.clone(),
-            stem: stem.clone(),
-            x: sim.model.x.clone(),
-            v: sim.model.v.clone(),
-            warm_start: sim.warm_start.clone(),
-        }
-        .save(dir)
+    let snapshot = |k: usize, sim: &drapery::Simulation| RunState {
+        fingerprint: fp,
+        frame: k as u64,
+        steps: sim.steps,
+        time: sim.time,
+        formats: format_list.clone(),
+        stem: stem.clone(),
+        x: sim.model.x.clone(),
+        v: sim.model.v.clone(),
+        warm_start: sim.warm_start.clone(),
     };
     let steps_per_frame = scene.steps_per_frame();
     let h = scene.step_size();
@@ -404,13 +290,17 @@ pub fn run(args: RunArgs) -> Result<()> {
     let mut cg_total: u64 = 0;
     let mut cg_max: usize = 0;
     let mut steps: u64 = 0;
-    let mut emit = |k: usize, sim: &drapery::Simulation, history: &mut History| -> Result<()> {
-        for w in writers.iter_mut() {
-            w.frame(k, &sim.model)?;
-        }
-        history.push(&sim.model.x)?;
-        save_state(k, sim)?;
+    let mut writer = Writer::start(RunOutput {
+        dir: dir.clone(),
+        cloths: sim.model.cloths.clone(),
+        writers: per_frame,
+        history,
+    })?;
+    // Hands frame k to the writer; `--stop-after-frames k` then waits until it is on disk.
+    let emit = |k: usize, sim: &drapery::Simulation, writer: &mut Writer<RunOutput>| {
+        writer.send(snapshot(k, sim))?;
         if args.stop_after_frames == Some(k) && k < frames {
+            writer.finish()?;
             bail!("stopped after frame {k} (--stop-after-frames)");
         }
         Ok(())
@@ -427,7 +317,7 @@ pub fn run(args: RunArgs) -> Result<()> {
                 });
             }
         }
-        emit(0, &sim, &mut history)?;
+        emit(0, &sim, &mut writer)?;
     }
     progress.set_position(first.saturating_sub(1) as u64);
     let mut failure = None;
@@ -449,17 +339,19 @@ pub fn run(args: RunArgs) -> Result<()> {
                 }
             }
         }
-        emit(k, &sim, &mut history)?;
+        emit(k, &sim, &mut writer)?;
         progress.set_message(format!("{:.3} s", k as f64 / scene.frame_rate));
         progress.inc(1);
     }
+    // Every frame handed off is on disk (or the writer's error is the run's).
+    let history = writer.finish()?.sink.history;
     if failure.is_some() {
         progress.abandon();
     }
     // Whole-run files are written even after a blow-up, with the frames done.
     let mut finish_error = None;
-    for w in writers.iter_mut() {
-        if let Err(e) = w.finish(&sim.model, &history.frames) {
+    for w in whole_run.iter_mut() {
+        if let Err(e) = w.finish(&sim.model.cloths, &history.frames) {
             finish_error.get_or_insert(e);
         }
     }

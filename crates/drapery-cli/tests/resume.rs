@@ -1,83 +1,10 @@
 //! `drapery run --resume` / `--overwrite`: an interrupted run continues to exactly the bits of an
 //! uninterrupted one, and a folder holding another run is never mixed into silently.
 
-use assert_cmd::Command;
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::{assert_one_error, assert_same_folders, contents, drapery, examples, run_args};
 use std::time::{Duration, Instant};
-
-fn examples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
-}
-
-struct Out {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-fn drapery<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Out {
-    let o = Command::new(env!("CARGO_BIN_EXE_drapery"))
-        .args(args)
-        .output()
-        .unwrap();
-    Out {
-        code: o.status.code(),
-        stdout: String::from_utf8_lossy(&o.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&o.stderr).into_owned(),
-    }
-}
-
-fn run_args(scene: &Path, out: &Path, extra: &[&str]) -> Vec<std::ffi::OsString> {
-    let mut v: Vec<std::ffi::OsString> = vec![
-        "run".into(),
-        scene.into(),
-        "-o".into(),
-        out.into(),
-        "-q".into(),
-    ];
-    v.extend(extra.iter().map(|s| s.into()));
-    v
-}
-
-/// Every file of a folder (name → bytes).
-fn contents(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| {
-            let e = e.unwrap();
-            (
-                e.file_name().to_string_lossy().into_owned(),
-                std::fs::read(e.path()).unwrap(),
-            )
-        })
-        .collect()
-}
-
-fn assert_same_folders(want: &Path, got: &Path) {
-    let (a, b) = (contents(want), contents(got));
-    assert_eq!(
-        a.keys().collect::<Vec<_>>(),
-        b.keys().collect::<Vec<_>>(),
-        "different file sets"
-    );
-    for (name, bytes) in &a {
-        assert!(
-            bytes == &b[name],
-            "{name} differs from the uninterrupted run"
-        );
-    }
-}
-
-fn assert_one_error(r: &Out, wants: &[&str]) {
-    assert_eq!(r.code, Some(1), "stdout {} stderr {}", r.stdout, r.stderr);
-    assert_eq!(r.stderr.lines().count(), 1, "{}", r.stderr);
-    assert!(r.stderr.starts_with("error: "), "{}", r.stderr);
-    assert!(!r.stderr.contains("panicked"), "{}", r.stderr);
-    for w in wants {
-        assert!(r.stderr.contains(w), "{:?} lacks {w:?}", r.stderr);
-    }
-}
 
 const ALL: &str = "obj,glb,usd,ply";
 
