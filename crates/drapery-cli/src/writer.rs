@@ -11,8 +11,9 @@
 //! the latest. A panic on the thread becomes an error too. Dropping a `Writer` without
 //! `finish` still waits for every frame handed off.
 //!
-//! The thread only formats and writes: with the OBJ writer the formatting runs on rayon's global
-//! pool (the one `--threads` sized), which changes timing but no result.
+//! The thread only formats and writes. It runs [`Sink::write`] in a rayon pool of its own with
+//! one thread, so the OBJ writer's parallel formatting runs sequentially there instead of taking
+//! workers from the global pool (the one `--threads` sized) in the middle of a step.
 
 use anyhow::{Result, anyhow, bail};
 use std::sync::mpsc::{SyncSender, sync_channel};
@@ -49,6 +50,11 @@ impl<S: Sink> Writer<S> {
     /// Starts the thread.
     pub fn start(sink: S) -> Result<Writer<S>> {
         let (tx, rx) = sync_channel::<S::Job>(DEPTH);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .thread_name(|_| "drapery-writer-format".into())
+            .build()
+            .map_err(|e| anyhow!("cannot start the frame writer thread: {e}"))?;
         let thread = std::thread::Builder::new()
             .name("drapery-writer".into())
             .spawn(move || {
@@ -56,7 +62,7 @@ impl<S: Sink> Writer<S> {
                 let mut busy = Duration::ZERO;
                 for job in rx {
                     let t = Instant::now();
-                    sink.write(job)?;
+                    pool.install(|| sink.write(job))?;
                     busy += t.elapsed();
                 }
                 Ok(Done { sink, busy })
