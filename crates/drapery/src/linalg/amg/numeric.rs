@@ -120,14 +120,15 @@ pub(super) fn smoother(lvl: &mut Level, params: &AmgParams) {
 const COARSE_ROWS: usize = 1024;
 
 /// Rayleigh quotient `xᵀAx / xᵀDx` (a lower bound of `ρ(D⁻¹A)`) after `steps` power steps
-/// `x ← D⁻¹A x / ‖·‖` from a fixed pseudo-random start; deterministic on any thread count.
-/// `x` and `y` are work vectors of the level's size.
+/// `x ← D⁻¹A x / ‖·‖_D` from a fixed pseudo-random start; every pass is parallel and the
+/// sums are chunked, so the result is the same on any thread count. `x` and `y` are work
+/// vectors of the level's size.
 fn spectral_estimate(
     a: &BlockMatrix,
     dinv: &[Mat3],
     steps: usize,
-    x: &mut [Vec3],
-    y: &mut [Vec3],
+    x: &mut Vec<Vec3>,
+    y: &mut Vec<Vec3>,
 ) -> f64 {
     for (i, xi) in x.iter_mut().enumerate() {
         let h = (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
@@ -135,12 +136,28 @@ fn spectral_estimate(
         *xi = Vec3::new(f(0), f(16), f(32));
     }
     let mut partial = Vec::new();
+    // ‖v‖_D² = Σ vᵢᵀ D_i vᵢ
+    let dnorm2 = |v: &mut [Vec3], partial: &mut Vec<f64>| {
+        chunked_sum(v, partial, |first, v| {
+            v.iter()
+                .enumerate()
+                .map(|(k, vi)| vi.dot(a.values[a.diag_index(first + k)] * *vi))
+                .sum()
+        })
+    };
+    let mut scale = dnorm2(x, &mut partial).sqrt();
     let mut estimate = 0.0;
     for _ in 0..steps {
-        // y = D⁻¹ A x; the sums of xᵀAx and of xᵀDx travel in one f64 each, packed by chunk
+        if !(scale > 0.0 && scale.is_finite()) {
+            break;
+        }
+        let inv = 1.0 / scale;
+        x.par_iter_mut()
+            .with_min_len(1024)
+            .for_each(|xi| *xi *= inv);
+        // y = D⁻¹ A x and xᵀ A x (x has unit D-norm)
         let x_ = &*x;
-        let mut den = 0.0;
-        let num = chunked_sum(y, &mut partial, |first, y| {
+        let num = chunked_sum(y.as_mut_slice(), &mut partial, |first, y| {
             let mut num = 0.0;
             for (k, yi) in y.iter_mut().enumerate() {
                 let i = first + k;
@@ -150,19 +167,11 @@ fn spectral_estimate(
             }
             num
         });
-        for (i, xi) in x.iter().enumerate() {
-            den += xi.dot(a.values[a.diag_index(i)] * *xi);
+        if num.is_finite() {
+            estimate = num;
         }
-        if den > 0.0 && num.is_finite() {
-            estimate = num / den;
-        }
-        let norm = super::super::vector::norm(y);
-        if !(norm > 0.0 && norm.is_finite()) {
-            break;
-        }
-        x.iter_mut()
-            .zip(y.iter())
-            .for_each(|(xi, yi)| *xi = *yi / norm);
+        scale = dnorm2(y, &mut partial).sqrt();
+        std::mem::swap(x, y);
     }
     estimate
 }
