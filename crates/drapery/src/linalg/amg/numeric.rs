@@ -117,7 +117,7 @@ pub(super) fn smoother(lvl: &mut Level, params: &AmgParams) {
 }
 
 /// Levels with at most this many rows get at least 20 power steps.
-const COARSE_ROWS: usize = 1024;
+const COARSE_ROWS: usize = 256;
 
 /// Rayleigh quotient `xᵀAx / xᵀDx` (a lower bound of `ρ(D⁻¹A)`) after `steps` power steps
 /// `x ← D⁻¹A x / ‖·‖_D` from a fixed pseudo-random start; every pass is parallel and the
