@@ -175,7 +175,7 @@ pub struct Multigrid {
     pub times: SetupTimes,
     /// Matrix and filter the structure is built from, when set ([`Multigrid::set_reference`]).
     reference: Option<(BlockMatrix, Vec<Mat3>)>,
-    /// Chunk sums of [`Multigrid::apply_dot`].
+    /// Chunk sums of [`Multigrid::apply`].
     partial: Vec<f64>,
 }
 
@@ -229,13 +229,9 @@ impl Multigrid {
     }
 
     /// `out = S V(r)`, one V-cycle applied to `r` (which should already be filtered), then
-    /// filtered. Call [`Multigrid::refresh`] first.
-    pub fn apply(&mut self, s: &[Mat3], r: &[Vec3], out: &mut [Vec3]) {
-        cycle::apply(self, s, r, out);
-    }
-
-    /// [`Multigrid::apply`], returning `rᵀ out` from the same pass.
-    pub fn apply_dot(&mut self, s: &[Mat3], r: &[Vec3], out: &mut [Vec3]) -> f64 {
+    /// filtered; returns `rᵀ out` from the same pass (what PCG needs next). Call
+    /// [`Multigrid::refresh`] first.
+    pub fn apply(&mut self, s: &[Mat3], r: &[Vec3], out: &mut [Vec3]) -> f64 {
         cycle::apply(self, s, r, out)
     }
 

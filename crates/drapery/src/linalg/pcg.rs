@@ -75,13 +75,14 @@ impl PcgScratch {
     }
 }
 
+/// `out = P⁻¹ r` (filtered); returns `rᵀ out`.
 fn precondition(
     amg: Option<&mut Multigrid>,
     pinv: &[Mat3],
     s: &[Mat3],
     r: &[Vec3],
     out: &mut [Vec3],
-) {
+) -> f64 {
     if let Some(amg) = amg {
         return amg.apply(s, r, out);
     }
@@ -89,6 +90,7 @@ fn precondition(
         .enumerate()
         .with_min_len(1024)
         .for_each(|(i, o)| *o = s[i] * (pinv[i] * r[i]));
+    dot(r, out)
 }
 
 /// Solves the filtered system; `x` holds the initial guess on entry (its free part is used,
@@ -174,12 +176,10 @@ pub fn solve_preconditioned_by(
     for i in 0..n {
         w.r[i] = s[i] * (b[i] - w.q[i]);
     }
-    precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.c);
-    let mut delta = dot(&w.r, &w.c);
+    let mut delta = precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.c);
     let target = settings.tolerance * r0;
     let mut stats = SolveStats::default();
     let mut rnorm = dot(&w.r, &w.r).sqrt();
-    let rinit = rnorm;
     while stats.iterations < settings.max_iterations {
         if rnorm <= target {
             break;
@@ -216,12 +216,7 @@ pub fn solve_preconditioned_by(
                 acc
             })
         };
-        let delta_new = if multigrid {
-            w.amg.apply_dot(s, &w.r, &mut w.s)
-        } else {
-            precondition(None, &w.pinv, s, &w.r, &mut w.s);
-            dot(&w.r, &w.s)
-        };
+        let delta_new = precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.s);
         stats.iterations += 1;
         rnorm = rr.sqrt();
         if !(delta_new > 0.0) && rnorm > target {
@@ -235,9 +230,6 @@ pub fn solve_preconditioned_by(
             .zip(w.s.par_iter())
             .with_min_len(CHUNK)
             .for_each(|(c, si)| *c = *si + beta * *c);
-    }
-    if std::env::var("DR_DBG").is_ok() {
-        eprintln!("init {:.3e} iters {}", rinit / r0, stats.iterations);
     }
     stats.relative_residual = rnorm / r0;
     stats.converged = rnorm <= target && rnorm.is_finite();

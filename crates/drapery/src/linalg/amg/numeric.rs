@@ -15,13 +15,12 @@ const ROWS: usize = 128;
 pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3]) {
     filter_matrix(a, s, &mut mg.levels[0].a);
     let params = mg.params;
-    let pweight = mg.params.prolongator_weight;
     for l in 0..mg.levels.len() {
         let (head, tail) = mg.levels.split_at_mut(l + 1);
         let lvl = &mut head[l];
         smoother(lvl, &params);
         if let Some(next) = tail.first_mut() {
-            transfer(lvl, &mut next.a, pweight);
+            transfer(lvl, &mut next.a, params.prolongator_weight);
         }
     }
     cycle::factor_coarsest(mg);
