@@ -138,6 +138,9 @@ pub struct Simulation {
     base_pairs: Vec<(u32, u32)>,
     /// Mass and model forces, on the fixed pattern of the model's forces.
     base_matrix: BlockMatrix,
+    /// Whether the last assembly added contact blocks to `matrix` (otherwise it equals
+    /// `base_matrix`).
+    matrix_has_contacts: bool,
     /// Position in `matrix` of each block of `base_matrix` (when contacts enlarge the pattern).
     base_slots: Vec<u32>,
     /// What the preconditioner is built from while contacts enlarge the pattern: the base
@@ -245,6 +248,7 @@ impl Simulation {
             steps: 0,
             forces,
             base_matrix: matrix.clone(),
+            matrix_has_contacts: false,
             base_slots: Vec::new(),
             precond_matrix: matrix.clone(),
             initial,
@@ -358,6 +362,7 @@ impl Simulation {
             h,
             &mut self.base_matrix,
         );
+        self.matrix_has_contacts = contact.is_some();
         let Some(c) = contact else {
             self.matrix.values.copy_from_slice(&self.base_matrix.values);
             return;
@@ -822,7 +827,10 @@ impl Simulation {
     ) -> Result<()> {
         match self.settings.linear_solver {
             LinearSolver::Pcg => {
-                let p = if self.matrix.same_pattern(&self.base_matrix) {
+                let p = if !self.matrix_has_contacts {
+                    // the same matrix: PCG then multiplies by the multigrid's compact copy
+                    &self.matrix
+                } else if self.matrix.same_pattern(&self.base_matrix) {
                     &self.base_matrix
                 } else {
                     &self.precond_matrix

@@ -7,6 +7,7 @@ pub mod amg;
 pub mod bsr;
 pub mod direct;
 pub mod pcg;
+pub mod sym;
 pub mod vector;
 
 pub use bsr::BlockMatrix;

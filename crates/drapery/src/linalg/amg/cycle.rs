@@ -7,7 +7,6 @@
 //! keeps `ω ρ(D⁻¹A) < 2`.
 
 use super::{CoarseSolver, Level, Multigrid};
-use crate::linalg::bsr::BlockMatrix;
 use crate::linalg::vector::chunked_sum;
 use crate::math::{Mat3, Vec3};
 use rayon::prelude::*;
@@ -56,13 +55,10 @@ fn cycle(levels: &mut [Level], coarse: &CoarseSolver, sweeps: usize) {
     let next = &mut rest[0];
     smooth(lvl, sweeps);
     // w = b - A x
-    let (a, x, b) = (&lvl.a, &lvl.x, &lvl.b);
-    let rows = min_len(a.n());
-    lvl.w
-        .par_iter_mut()
-        .enumerate()
-        .with_min_len(rows)
-        .for_each(|(i, wi)| *wi = residual(a, x, b, i));
+    let (x, b) = (&lvl.x, &lvl.b);
+    let rows = min_len(lvl.a.n());
+    lvl.sym
+        .mul_then(x, &mut lvl.w, &mut lvl.partial, |i, ax| (b[i] - ax, 0.0));
     // b_c = Pᵀ w
     let w = &lvl.w;
     next.b
@@ -113,25 +109,12 @@ fn smooth(lvl: &mut Level, sweeps: usize) {
 /// `sweeps` damped block-Jacobi sweeps `x ← x + ω D⁻¹ (b - A x)` from the current `x`.
 fn smooth_more(lvl: &mut Level, sweeps: usize) {
     for _ in 0..sweeps {
-        let (a, x, b, dinv, omega) = (&lvl.a, &lvl.x, &lvl.b, &lvl.dinv, lvl.omega);
-        lvl.w
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(min_len(b.len()))
-            .for_each(|(i, wi)| *wi = x[i] + omega * (dinv[i] * residual(a, x, b, i)));
+        let (x, b, dinv, omega) = (&lvl.x, &lvl.b, &lvl.dinv, lvl.omega);
+        lvl.sym.mul_then(x, &mut lvl.w, &mut lvl.partial, |i, ax| {
+            (x[i] + omega * (dinv[i] * (b[i] - ax)), 0.0)
+        });
         std::mem::swap(&mut lvl.x, &mut lvl.w);
     }
-}
-
-/// Row `i` of `b - A x`.
-#[inline]
-fn residual(a: &BlockMatrix, x: &[Vec3], b: &[Vec3], i: usize) -> Vec3 {
-    let (cols, r) = a.row(i);
-    let mut acc = b[i];
-    for (c, m) in cols.iter().zip(&a.values[r]) {
-        acc -= *m * x[*c as usize];
-    }
-    acc
 }
 
 /// Factors the coarsest level's matrix densely (`None` if not positive definite).

@@ -4,7 +4,7 @@
 
 use super::{AmgParams, Level, Multigrid, NONE, Transfer, WEAK, cycle, norm_inf, safe_inverse};
 use crate::linalg::bsr::{BlockMatrix, row_chunks};
-use crate::linalg::vector::chunked_sum;
+use crate::linalg::vector::chunked_sum_pair;
 use crate::math::{Mat3, Vec3};
 use rayon::prelude::*;
 
@@ -24,6 +24,14 @@ pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3]) {
         }
     }
     cycle::factor_coarsest(mg);
+    upper_triangles(&mut mg.levels);
+}
+
+/// Copies every level's matrix into its upper-triangle storage.
+pub(super) fn upper_triangles(levels: &mut [Level]) {
+    for lvl in levels {
+        lvl.sym.set_values(&lvl.a);
+    }
 }
 
 /// `out = S A S + (I - S)` block by block (`out` has the pattern of `a`).
@@ -76,30 +84,19 @@ fn sym_inverse(d: &Mat3) -> Mat3 {
 /// Block-Jacobi smoother of a level: `D⁻¹` and `ω = weight / ρ̄`.
 ///
 /// `ρ̄` estimates `ρ(D⁻¹A)`: the Rayleigh quotient after a few power steps (a lower bound
-/// that converges fast; [`AmgParams::power_steps`]), capped by the Gershgorin bound
-/// `G = max_i Σ_j ‖D_i⁻¹ A_ij‖_∞ ≥ ρ`. On cloth `G` overestimates `ρ` by 1.8–1.9× on the
-/// finest level of hanging sheets and by more on some levels of a draped one, so damping by
-/// `G` smoothed far too weakly.
+/// that converges fast; [`AmgParams::power_steps`]). Only when that fails (a matrix that is
+/// not positive definite, or not finite) is the Gershgorin bound
+/// `G = max_i Σ_j ‖D_i⁻¹ A_ij‖_∞ ≥ ρ` computed instead. `G` is never needed as a cap: the
+/// Rayleigh quotient of a symmetric `A` and positive definite `D` is at most `ρ`. On cloth `G`
+/// overestimates `ρ` by 1.8–1.9× on the finest level of hanging sheets, and by more on some
+/// levels of a draped one, so damping by `G` smoothed far too weakly.
 pub(super) fn smoother(lvl: &mut Level, params: &AmgParams) {
     let a = &lvl.a;
-    let bound = lvl
-        .dinv
+    lvl.dinv
         .par_iter_mut()
         .enumerate()
         .with_min_len(ROWS)
-        .map(|(i, dinv)| {
-            *dinv = sym_inverse(&a.values[a.diag_index(i)]);
-            let (_, r) = a.row(i);
-            a.values[r]
-                .iter()
-                .map(|m| norm_inf(&(*dinv * *m)))
-                .sum::<f64>()
-        })
-        .reduce(|| 0.0, f64::max);
-    if !(bound > 0.0 && bound.is_finite()) {
-        lvl.omega = 1.0;
-        return;
-    }
+        .for_each(|(i, dinv)| *dinv = sym_inverse(&a.values[a.diag_index(i)]));
     // more steps on the small levels, where they cost nothing
     let steps = if a.n() > COARSE_ROWS {
         params.power_steps
@@ -107,21 +104,43 @@ pub(super) fn smoother(lvl: &mut Level, params: &AmgParams) {
         params.power_steps.max(20)
     };
     let estimate = spectral_estimate(a, &lvl.dinv, steps, &mut lvl.w, &mut lvl.x);
-    let rho = if estimate > 0.0 {
-        estimate.min(bound)
+    let rho = if estimate > 0.0 && estimate.is_finite() {
+        estimate
     } else {
-        bound
+        gershgorin(a, &lvl.dinv)
     };
-    lvl.omega = params.smoother_weight / rho;
+    lvl.omega = if rho > 0.0 && rho.is_finite() {
+        params.smoother_weight / rho
+    } else {
+        1.0
+    };
+}
+
+/// `max_i Σ_j ‖D_i⁻¹ A_ij‖_∞`, an upper bound of `ρ(D⁻¹A)`.
+fn gershgorin(a: &BlockMatrix, dinv: &[Mat3]) -> f64 {
+    dinv.par_iter()
+        .enumerate()
+        .with_min_len(ROWS)
+        .map(|(i, dinv)| {
+            let (_, r) = a.row(i);
+            a.values[r]
+                .iter()
+                .map(|m| norm_inf(&(*dinv * *m)))
+                .sum::<f64>()
+        })
+        .reduce(|| 0.0, f64::max)
 }
 
 /// Levels with at most this many rows get at least 20 power steps.
 const COARSE_ROWS: usize = 256;
 
 /// Rayleigh quotient `xᵀAx / xᵀDx` (a lower bound of `ρ(D⁻¹A)`) after `steps` power steps
-/// `x ← D⁻¹A x / ‖·‖_D` from a fixed pseudo-random start; every pass is parallel and the
-/// sums are chunked, so the result is the same on any thread count. `x` and `y` are work
-/// vectors of the level's size.
+/// `x ← D⁻¹A x` from a fixed pseudo-random start (0 if it is not positive and finite).
+///
+/// One pass per step: each row's product `(A x)_i` gives both sums of the quotient (the
+/// diagonal block `D_i` is in the row) and the next iterate, scaled by the previous quotient
+/// so that its size stays put. The sums are chunked, so the result is the same on any thread
+/// count. `x` and `y` are work vectors of the level's size.
 fn spectral_estimate(
     a: &BlockMatrix,
     dinv: &[Mat3],
@@ -135,41 +154,25 @@ fn spectral_estimate(
         *xi = Vec3::new(f(0), f(16), f(32));
     }
     let mut partial = Vec::new();
-    // ‖v‖_D² = Σ vᵢᵀ D_i vᵢ
-    let dnorm2 = |v: &mut [Vec3], partial: &mut Vec<f64>| {
-        chunked_sum(v, partial, |first, v| {
-            v.iter()
-                .enumerate()
-                .map(|(k, vi)| vi.dot(a.values[a.diag_index(first + k)] * *vi))
-                .sum()
-        })
-    };
-    let mut scale = dnorm2(x, &mut partial).sqrt();
-    let mut estimate = 0.0;
+    let (mut estimate, mut scale) = (0.0, 1.0);
     for _ in 0..steps {
-        if !(scale > 0.0 && scale.is_finite()) {
-            break;
-        }
-        let inv = 1.0 / scale;
-        x.par_iter_mut()
-            .with_min_len(1024)
-            .for_each(|xi| *xi *= inv);
-        // y = D⁻¹ A x and xᵀ A x (x has unit D-norm)
         let x_ = &*x;
-        let num = chunked_sum(y.as_mut_slice(), &mut partial, |first, y| {
-            let mut num = 0.0;
+        let [num, den] = chunked_sum_pair(y.as_mut_slice(), &mut partial, |first, y| {
+            let (mut num, mut den) = (0.0, 0.0);
             for (k, yi) in y.iter_mut().enumerate() {
                 let i = first + k;
                 let ax = a.row_product(i, x_);
                 num += x_[i].dot(ax);
-                *yi = dinv[i] * ax;
+                den += x_[i].dot(a.values[a.diag_index(i)] * x_[i]);
+                *yi = scale * (dinv[i] * ax);
             }
-            num
+            [num, den]
         });
-        if num.is_finite() {
-            estimate = num;
+        let q = num / den;
+        if !(q > 0.0 && q.is_finite()) {
+            return 0.0;
         }
-        scale = dnorm2(y, &mut partial).sqrt();
+        (estimate, scale) = (q, 1.0 / q);
         std::mem::swap(x, y);
     }
     estimate
