@@ -94,10 +94,16 @@ struct Transfer {
     p: Vec<Mat3>,
     /// Per fine row, the position in `p` of its own aggregate's column ([`NONE`] if left out).
     p_own: Vec<u32>,
-    /// `Pᵀ` by coarse row: the fine row and the position in `p` of each entry.
+    /// `Pᵀ` by coarse row: the fine row, the position in `p` of each entry and (refreshed
+    /// with `p`) its transposed block, stored in this order so that the restriction and the
+    /// Galerkin product stream it.
     pt_ptr: Vec<u32>,
     pt_row: Vec<u32>,
     pt_src: Vec<u32>,
+    pt: Vec<Mat3>,
+    /// Per entry of `Pᵀ` (coarse row `I`, fine row `i`), how many leading blocks of `T`'s row
+    /// `i` have a column below `I`: the Galerkin product computes the upper triangle only.
+    pt_skip: Vec<u32>,
     /// Per block of the fine matrix: position in `p` of the slot that block `(i, j)` of `A^F`
     /// feeds (the column `agg(j)` of row `i`), or [`WEAK`].
     a_slot: Vec<u32>,
@@ -108,9 +114,12 @@ struct Transfer {
     t_pos_ptr: Vec<u32>,
     t_pos: Vec<u32>,
     /// Per coarse row, the start in `c_pos` of the target positions (in the coarse matrix's
-    /// values) of its products `P_iIᵀ T_iJ`, in loop order.
+    /// values) of its products `P_iIᵀ T_iJ` with `J ≥ I`, in loop order.
     c_pos_ptr: Vec<u32>,
     c_pos: Vec<u32>,
+    /// Each block of the coarse matrix's lower triangle and the position of its transpose
+    /// (itself for a diagonal block, which is symmetrized), set after the upper triangle.
+    c_lower: Vec<[u32; 2]>,
 }
 
 /// Marks a weak block in [`Transfer::a_slot`].

@@ -11,7 +11,7 @@
 //! start for a banded ordering) are gathered afterwards, in a fixed order, by the task of row
 //! `j`'s chunk. Each `y_j` is thus summed in one order whatever the thread count.
 
-use super::bsr::BlockMatrix;
+use super::bsr::{BlockMatrix, row_chunks};
 use crate::math::{Mat3, Vec3};
 use rayon::prelude::*;
 
@@ -23,8 +23,6 @@ pub struct SymBlockMatrix {
     row_ptr: Vec<u32>,
     col: Vec<u32>,
     values: Vec<Mat3>,
-    /// Position in the full matrix's values of each stored block.
-    src: Vec<u32>,
     /// Per row `j`, the remote terms: row `i` (in an earlier chunk) and position of `A_ij`.
     remote_ptr: Vec<u32>,
     remote_row: Vec<u32>,
@@ -45,20 +43,21 @@ impl SymBlockMatrix {
     pub fn from_pattern(a: &BlockMatrix) -> Self {
         let n = a.n();
         let chunk = chunk_rows(n);
-        let (mut row_ptr, mut col, mut src) = (vec![0u32], Vec::new(), Vec::new());
+        let (mut row_ptr, mut col) = (vec![0u32], Vec::new());
         let mut remote: Vec<(u32, u32, u32)> = Vec::new();
         for i in 0..n {
             let (cols, r) = a.row(i);
             let chunk_end = ((i / chunk + 1) * chunk).min(n);
-            for (&j, k) in cols.iter().zip(r) {
-                if (j as usize) < i {
-                    continue;
-                }
+            // the upper part of a sorted row is the part from the diagonal on
+            debug_assert_eq!(
+                r.start + cols.partition_point(|&j| (j as usize) < i),
+                a.diag_index(i)
+            );
+            for &j in cols.iter().filter(|&&j| j as usize >= i) {
                 if j as usize >= chunk_end {
                     remote.push((j, i as u32, col.len() as u32));
                 }
                 col.push(j);
-                src.push(k as u32);
             }
             row_ptr.push(col.len() as u32);
         }
@@ -75,7 +74,6 @@ impl SymBlockMatrix {
             values: vec![Mat3::ZERO; col.len()],
             row_ptr,
             col,
-            src,
             remote_ptr,
             remote_row: remote.iter().map(|t| t.1).collect(),
             remote_pos: remote.iter().map(|t| t.2).collect(),
@@ -93,14 +91,19 @@ impl SymBlockMatrix {
         self.col.len()
     }
 
-    /// Copies the upper triangle of `a` (of the pattern this was built from).
+    /// Copies the upper triangle of `a` (of the pattern this was built from): row by row, the
+    /// part of `a`'s row from its diagonal on.
     pub fn set_values(&mut self, a: &BlockMatrix) {
-        let src = &self.src;
-        self.values
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(4096)
-            .for_each(|(k, v)| *v = a.values[src[k] as usize]);
+        let chunks = row_chunks(&mut self.values, &self.row_ptr, 1024);
+        chunks.into_par_iter().for_each(|(rows, vals)| {
+            let mut at = 0;
+            for i in rows {
+                let (_, r) = a.row(i);
+                let upper = &a.values[a.diag_index(i)..r.end];
+                vals[at..at + upper.len()].copy_from_slice(upper);
+                at += upper.len();
+            }
+        });
     }
 
     /// `y = A x`, then `y_i = finish(i, (A x)_i)` row by row; returns the sum of what

@@ -68,9 +68,7 @@ fn cycle(levels: &mut [Level], coarse: &CoarseSolver, sweeps: usize) {
         .for_each(|(c, bc)| {
             let mut acc = Vec3::ZERO;
             for e in t.pt_ptr[c] as usize..t.pt_ptr[c + 1] as usize {
-                // Pᵀ w: the columns of the block dotted with w
-                let (m, wi) = (&t.p[t.pt_src[e] as usize], w[t.pt_row[e] as usize]);
-                acc += Vec3::new(m.x_axis.dot(wi), m.y_axis.dot(wi), m.z_axis.dot(wi));
+                acc += t.pt[e] * w[t.pt_row[e] as usize];
             }
             *bc = acc;
         });

@@ -200,6 +200,11 @@ pub(super) fn transfer(lvl: &mut Level, coarse: &mut BlockMatrix, weight: f64) {
                 }
             }
         });
+    let Transfer { pt, pt_src, p, .. } = t;
+    pt.par_iter_mut()
+        .enumerate()
+        .with_min_len(4 * ROWS)
+        .for_each(|(e, m)| *m = p[pt_src[e] as usize].transpose());
     galerkin(a, t, coarse);
 }
 
@@ -255,7 +260,8 @@ fn prolongator(a: &BlockMatrix, t: &mut Transfer, weight: f64) -> f64 {
     }
 }
 
-/// `T = A P`, then `coarse = Pᵀ T`, over the precomputed positions.
+/// `T = A P`, then `coarse = Pᵀ T` over the precomputed positions: the upper triangle, and
+/// the lower one as its transpose (`Pᵀ A P` is symmetric).
 fn galerkin(a: &BlockMatrix, t: &mut Transfer, coarse: &mut BlockMatrix) {
     let Transfer {
         p_ptr,
@@ -285,14 +291,15 @@ fn galerkin(a: &BlockMatrix, t: &mut Transfer, coarse: &mut BlockMatrix) {
         });
     let ptr = coarse.row_ptr().to_vec();
     let Transfer {
-        p,
         pt_ptr,
         pt_row,
-        pt_src,
+        pt,
+        pt_skip,
         t_ptr,
         t: tv,
         c_pos_ptr,
         c_pos,
+        c_lower,
         ..
     } = t;
     row_chunks(&mut coarse.values, &ptr, ROWS / 4)
@@ -304,12 +311,22 @@ fn galerkin(a: &BlockMatrix, t: &mut Transfer, coarse: &mut BlockMatrix) {
                 let mut pos = c_pos_ptr[c] as usize;
                 for e in pt_ptr[c] as usize..pt_ptr[c + 1] as usize {
                     let i = pt_row[e] as usize;
-                    let pt = p[pt_src[e] as usize].transpose();
-                    for m in &tv[t_ptr[i] as usize..t_ptr[i + 1] as usize] {
-                        vals[c_pos[pos] as usize - base] += pt * *m;
+                    let first = (t_ptr[i] + pt_skip[e]) as usize;
+                    for m in &tv[first..t_ptr[i + 1] as usize] {
+                        vals[c_pos[pos] as usize - base] += pt[e] * *m;
                         pos += 1;
                     }
                 }
             }
         });
+    // the lower triangle is the transpose of the upper one; diagonal blocks are symmetrized
+    for &[k, kt] in c_lower.iter() {
+        let (k, kt) = (k as usize, kt as usize);
+        let m = coarse.values[kt].transpose();
+        coarse.values[k] = if k == kt {
+            0.5 * (coarse.values[k] + m)
+        } else {
+            m
+        };
+    }
 }

@@ -215,15 +215,29 @@ pub(super) fn transfer(a: &BlockMatrix, theta: f64) -> Option<(Transfer, BlockMa
     pairs.dedup();
     let coarse = BlockMatrix::from_pairs(nc, &pairs);
     t.c_pos_ptr.push(0);
+    t.pt = vec![Mat3::ZERO; t.pt_row.len()];
+    t.pt_skip = vec![0; t.pt_row.len()];
     for c in 0..nc {
-        for e in t.pt_ptr[c]..t.pt_ptr[c + 1] {
-            let i = t.pt_row[e as usize] as usize;
-            for &j in &t_col[t.t_ptr[i] as usize..t.t_ptr[i + 1] as usize] {
+        for e in t.pt_ptr[c] as usize..t.pt_ptr[c + 1] as usize {
+            let i = t.pt_row[e] as usize;
+            let cols = &t_col[t.t_ptr[i] as usize..t.t_ptr[i + 1] as usize];
+            let skip = cols.partition_point(|&j| (j as usize) < c);
+            t.pt_skip[e] = skip as u32;
+            for &j in &cols[skip..] {
                 let k = coarse.find(c, j as usize).expect("coarse pattern");
                 t.c_pos.push(k as u32);
             }
         }
         t.c_pos_ptr.push(t.c_pos.len() as u32);
+    }
+    for c in 0..nc {
+        let (cols, r) = coarse.row(c);
+        for (&j, k) in cols.iter().zip(r) {
+            if (j as usize) <= c {
+                let kt = coarse.find(j as usize, c).expect("symmetric pattern");
+                t.c_lower.push([k as u32, kt as u32]);
+            }
+        }
     }
     Some((t, coarse))
 }

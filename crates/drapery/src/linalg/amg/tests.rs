@@ -255,3 +255,60 @@ fn multigrid_pcg_gives_the_same_bits_on_one_and_two_threads() {
     };
     assert_eq!(run(1), run(2));
 }
+
+/// Dense `rows × cols` copy of a transfer's `P` (3×3 blocks).
+fn dense_p(t: &Transfer, rows: usize, cols: usize) -> Vec<Vec<f64>> {
+    let mut d = vec![vec![0.0; 3 * cols]; 3 * rows];
+    for i in 0..rows {
+        for q in t.p_ptr[i] as usize..t.p_ptr[i + 1] as usize {
+            let c = t.p_col[q] as usize;
+            for (a, row) in d[3 * i..3 * i + 3].iter_mut().enumerate() {
+                for b in 0..3 {
+                    row[3 * c + b] = t.p[q].col(b)[a];
+                }
+            }
+        }
+    }
+    d
+}
+
+#[test]
+fn every_coarse_operator_is_the_galerkin_product_of_the_finer_one() {
+    // a few steps in, with pins and plane contacts in the filter
+    let a = cloth_matrix(20, 4);
+    let s = mixed_filter(a.n(), 20);
+    let mut mg = Multigrid::default();
+    mg.params.strength = 0.08;
+    mg.refresh(&a, &s);
+    assert!(mg.levels.len() >= 3, "{:?}", mg.level_sizes());
+    for pair in mg.levels.windows(2) {
+        let (fine, coarse) = (&pair[0], &pair[1]);
+        let p = dense_p(fine.transfer.as_ref().unwrap(), fine.a.n(), coarse.a.n());
+        let af = fine.a.to_dense();
+        let (nf, nc) = (p.len(), p[0].len());
+        // A P, then Pᵀ (A P)
+        let ap: Vec<Vec<f64>> = (0..nf)
+            .map(|i| {
+                (0..nc)
+                    .map(|c| (0..nf).map(|k| af[i][k] * p[k][c]).sum())
+                    .collect()
+            })
+            .collect();
+        let want: Vec<Vec<f64>> = (0..nc)
+            .map(|r| {
+                (0..nc)
+                    .map(|c| (0..nf).map(|k| p[k][r] * ap[k][c]).sum())
+                    .collect()
+            })
+            .collect();
+        let got = coarse.a.to_dense();
+        let scale = want.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (gr, wr) in got.iter().zip(&want) {
+            for (g, w) in gr.iter().zip(wr) {
+                assert!((g - w).abs() <= 1e-12 * scale, "{g} vs {w}");
+            }
+        }
+        // computed as the upper triangle and its transpose: exactly symmetric
+        assert_eq!(coarse.a.asymmetry(), 0.0);
+    }
+}
