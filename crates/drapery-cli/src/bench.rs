@@ -21,7 +21,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use drapery::Simulation;
 use drapery::Vec3;
-use drapery::model::ClothInfo;
+use drapery::io::obj::ObjWriter;
 use drapery::presets::Preset;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -90,13 +90,13 @@ struct RunTimes {
 /// The writer thread's work in a bench run: each frame written over the same OBJ file.
 struct ObjFile {
     path: PathBuf,
-    cloths: Vec<ClothInfo>,
+    obj: ObjWriter,
 }
 
 impl Sink for ObjFile {
     type Job = Vec<Vec3>;
     fn write(&mut self, x: Vec<Vec3>) -> Result<()> {
-        Ok(drapery::io::obj::write_obj(&self.path, &self.cloths, &x)?)
+        Ok(self.obj.write(&self.path, &x)?)
     }
 }
 
@@ -110,7 +110,7 @@ fn run_once(name: &str, frames: usize, tolerance: f64, dir: &std::path::Path) ->
     let mut t = RunTimes::default();
     let mut writer = Writer::start(ObjFile {
         path: dir.join(format!("{name}.obj")),
-        cloths: sim.model.cloths.clone(),
+        obj: ObjWriter::new(&sim.model.cloths),
     })?;
     let start = Instant::now();
     for _ in 0..frames {

@@ -10,7 +10,7 @@ use clap::ValueEnum;
 use drapery::Vec3;
 use drapery::collision::settings::Obstacle;
 use drapery::io::gltf::{StaticMesh, write_glb_with};
-use drapery::io::obj::write_obj;
+use drapery::io::obj::ObjWriter;
 use drapery::io::ply::write_ply;
 use drapery::io::usd::write_usda;
 use drapery::model::ClothInfo;
@@ -50,7 +50,8 @@ impl Format {
 
 /// A sink for frames. `Send`: per-frame writers run on the writer thread.
 pub trait FrameWriter: Send {
-    /// Frame `k` (0-based; frame 0 is the initial state) with positions `x`.
+    /// Frame `k` (0-based; frame 0 is the initial state) with positions `x`. The cloths are the
+    /// same in every call.
     fn frame(&mut self, _k: usize, _cloths: &[ClothInfo], _x: &[Vec3]) -> drapery::Result<()> {
         Ok(())
     }
@@ -69,11 +70,14 @@ pub trait FrameWriter: Send {
 /// `DIR/frame_NNNNN.obj`, one per frame, each written atomically.
 struct ObjFrames {
     dir: PathBuf,
+    /// Made at the first frame (the cloths are the same in every frame).
+    obj: Option<ObjWriter>,
 }
 
 impl FrameWriter for ObjFrames {
     fn frame(&mut self, k: usize, cloths: &[ClothInfo], x: &[Vec3]) -> drapery::Result<()> {
-        write_obj(&frame_path(&self.dir, k, "obj"), cloths, x)
+        let obj = self.obj.get_or_insert_with(|| ObjWriter::new(cloths));
+        obj.write(&frame_path(&self.dir, k, "obj"), x)
     }
 }
 
@@ -138,7 +142,7 @@ pub fn writer_for(
 ) -> Box<dyn FrameWriter> {
     let dir = dir.to_path_buf();
     match format {
-        Format::Obj => Box::new(ObjFrames { dir }),
+        Format::Obj => Box::new(ObjFrames { dir, obj: None }),
         Format::Ply => Box::new(PlyFrames { dir }),
         Format::Glb | Format::Usd => Box::new(WholeRun {
             format,

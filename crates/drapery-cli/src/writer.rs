@@ -11,9 +11,10 @@
 //! the latest. A panic on the thread becomes an error too. Dropping a `Writer` without
 //! `finish` still waits for every frame handed off.
 //!
-//! The thread only formats and writes. It runs [`Sink::write`] in a rayon pool of its own with
-//! one thread, so the OBJ writer's parallel formatting runs sequentially there instead of taking
-//! workers from the global pool (the one `--threads` sized) in the middle of a step.
+//! The thread only formats and writes, sequentially: no writer formats in parallel. It runs
+//! [`Sink::write`] in a rayon pool of its own with one thread all the same, so that a rayon call
+//! in a sink can never take workers from the global pool (the one `--threads` sized) in the
+//! middle of a step.
 
 use anyhow::{Result, anyhow, bail};
 use std::sync::mpsc::{SyncSender, sync_channel};

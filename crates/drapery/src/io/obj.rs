@@ -11,16 +11,16 @@
 //! tagged with its own input index. `tobj` parses that copy; it renumbers vertices by first use,
 //! and the tags map its numbering back to the input order.
 //!
-//! Writing prints every coordinate with Rust's shortest round-trip formatting, so reading a
-//! written file back gives the same `f64` bits.
+//! Writing ([`write_obj`], [`ObjWriter`] for a sequence of frames) prints every coordinate in
+//! its shortest round-trip form, so reading a written file back gives the same `f64` bits.
 
 use crate::error::{Error, Result};
 use crate::io::write_atomic;
 use crate::math::Vec3;
 use crate::mesh::{Face, Mesh};
 use crate::model::ClothInfo;
-use rayon::prelude::*;
 use std::fmt::Write as _;
+use std::ops::Range;
 use std::path::Path;
 
 /// Reads an OBJ file into a [`Mesh`] and validates it ([`Mesh::validate`]).
@@ -323,58 +323,128 @@ fn with_line_numbers(e: Error, origins: &Origins) -> Error {
 /// Writes one frame: every cloth as `o NAME`, its vertices (positions taken from `x`, the
 /// model's particle array) in order, then its faces and line elements in input order, with
 /// 1-based indices over the whole file. Written atomically ([`write_atomic`]).
+///
+/// For a sequence of frames of the same cloths, [`ObjWriter`] writes the same bytes with less
+/// work per frame.
 pub fn write_obj(path: &Path, cloths: &[ClothInfo], x: &[Vec3]) -> Result<()> {
-    let text =
-        obj_text(cloths, x).map_err(|m| Error::Invalid(format!("{}: {m}", path.display())))?;
-    write_atomic(path, text.as_bytes())
+    ObjWriter::new(cloths).write(path, x)
 }
 
 /// The OBJ text [`write_obj`] writes.
 pub fn obj_text(cloths: &[ClothInfo], x: &[Vec3]) -> std::result::Result<String, String> {
-    let vertices: usize = cloths.iter().map(|c| c.mesh.positions.len()).sum();
-    let mut s = String::with_capacity(vertices * 64 + 64);
-    s.push_str("# drapery frame\n");
-    let mut base = 0u64;
-    for c in cloths {
-        let pos = x.get(c.range()).ok_or_else(|| {
-            format!(
-                "cloth '{}' needs particles {:?} but the state has {}",
-                c.name,
-                c.range(),
-                x.len()
-            )
-        })?;
-        let _ = writeln!(s, "o {}", c.name);
-        // formatting the coordinates dominates: chunks in parallel, joined in order
-        let lines: Vec<String> = pos
-            .par_chunks(2048)
-            .map(|chunk| {
-                let mut t = String::with_capacity(chunk.len() * 64);
-                for p in chunk {
-                    let _ = writeln!(t, "v {:?} {:?} {:?}", p.x, p.y, p.z);
+    let mut w = ObjWriter::new(cloths);
+    w.format(x)?;
+    Ok(w.text)
+}
+
+/// Writes OBJ frames of one set of cloths, as [`write_obj`] does. What is the same in every
+/// frame (the `o` lines, faces and line elements) is formatted once, by [`ObjWriter::new`]; a
+/// frame formats only its vertex positions, into a buffer kept from frame to frame.
+///
+/// Coordinates are printed by `zmij` in the shortest decimal form that reads back to the same
+/// `f64` bits: `0.5`, `1.0`, `-0.0`, and very small or large magnitudes with an exponent
+/// (`2.5e-8`, `1e+21`), as OBJ readers accept.
+pub struct ObjWriter {
+    cloths: Vec<Part>,
+    /// The last frame's text.
+    text: String,
+}
+
+/// One cloth's part of the file.
+struct Part {
+    name: String,
+    range: Range<usize>,
+    /// `o NAME`.
+    head: String,
+    /// The faces and line elements.
+    tail: String,
+}
+
+/// The longest vertex line: `v`, three coordinates of at most 24 characters
+/// (`-2.2250738585072014e-308`), three spaces and the newline.
+const VERTEX_LINE_MAX: usize = 1 + 3 * (1 + 24) + 1;
+
+impl ObjWriter {
+    /// Formats what the frames of `cloths` share.
+    pub fn new(cloths: &[ClothInfo]) -> ObjWriter {
+        let mut base = 0u64;
+        let parts = cloths
+            .iter()
+            .map(|c| {
+                let mut tail = String::new();
+                for f in &c.mesh.faces {
+                    tail.push('f');
+                    for &v in f.indices() {
+                        let _ = write!(tail, " {}", base + v as u64 + 1);
+                    }
+                    tail.push('\n');
                 }
-                t
+                for l in &c.mesh.lines {
+                    let _ = writeln!(
+                        tail,
+                        "l {} {}",
+                        base + l[0] as u64 + 1,
+                        base + l[1] as u64 + 1
+                    );
+                }
+                base += c.mesh.positions.len() as u64;
+                Part {
+                    name: c.name.clone(),
+                    range: c.range(),
+                    head: format!("o {}\n", c.name),
+                    tail,
+                }
             })
             .collect();
-        lines.iter().for_each(|t| s.push_str(t));
-        for f in &c.mesh.faces {
-            s.push('f');
-            for &v in f.indices() {
-                let _ = write!(s, " {}", base + v as u64 + 1);
-            }
-            s.push('\n');
+        ObjWriter {
+            cloths: parts,
+            text: String::new(),
         }
-        for l in &c.mesh.lines {
-            let _ = writeln!(s, "l {} {}", base + l[0] as u64 + 1, base + l[1] as u64 + 1);
-        }
-        base += pos.len() as u64;
     }
-    Ok(s)
+
+    /// Writes the frame with positions `x` (the model's particle array) to `path`, atomically
+    /// ([`write_atomic`]).
+    pub fn write(&mut self, path: &Path, x: &[Vec3]) -> Result<()> {
+        self.format(x)
+            .map_err(|m| Error::Invalid(format!("{}: {m}", path.display())))?;
+        write_atomic(path, self.text.as_bytes())
+    }
+
+    /// Puts the frame's text in `self.text`.
+    fn format(&mut self, x: &[Vec3]) -> std::result::Result<(), String> {
+        let s = &mut self.text;
+        s.clear();
+        s.push_str("# drapery frame\n");
+        let mut digits = zmij::Buffer::new();
+        for c in &self.cloths {
+            let pos = x.get(c.range.clone()).ok_or_else(|| {
+                format!(
+                    "cloth '{}' needs particles {:?} but the state has {}",
+                    c.name,
+                    c.range,
+                    x.len()
+                )
+            })?;
+            s.reserve(c.head.len() + pos.len() * VERTEX_LINE_MAX + c.tail.len());
+            s.push_str(&c.head);
+            for p in pos {
+                s.push('v');
+                for v in [p.x, p.y, p.z] {
+                    s.push(' ');
+                    s.push_str(digits.format(v));
+                }
+                s.push('\n');
+            }
+            s.push_str(&c.tail);
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
     fn parse(text: &str) -> Result<Mesh> {
         parse_obj(text.as_bytes(), "t.obj")
@@ -452,5 +522,105 @@ mod tests {
         }
         assert_eq!(back.faces, mesh.faces);
         assert_eq!(back.lines, mesh.lines);
+    }
+
+    /// Every finite f64: any bit pattern (mostly huge or tiny magnitudes), every class by
+    /// proptest's float strategy (normal, subnormal, zero, both signs), cloth-sized values, and
+    /// the edges.
+    fn coordinate() -> impl Strategy<Value = f64> {
+        use proptest::num::f64 as class;
+        prop_oneof![
+            any::<u64>()
+                .prop_map(f64::from_bits)
+                .prop_filter("finite", |v| v.is_finite()),
+            class::NORMAL | class::SUBNORMAL | class::ZERO | class::POSITIVE | class::NEGATIVE,
+            -2.0..2.0f64,
+            prop::sample::select(vec![
+                0.0,
+                -0.0,
+                5e-324,
+                -5e-324,
+                f64::MIN_POSITIVE,
+                f64::MIN_POSITIVE.next_down(),
+                f64::MAX,
+                f64::MIN,
+                1e-5,
+                1e-4,
+                1e15,
+                1e16,
+                1e21,
+                9007199254740993.0,
+            ]),
+        ]
+    }
+
+    fn points(name: &str, positions: Vec<Vec3>) -> ClothInfo {
+        ClothInfo {
+            name: name.into(),
+            offset: 0,
+            mesh: Mesh {
+                positions,
+                faces: vec![],
+                lines: vec![],
+            },
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+
+        #[test]
+        fn written_file_reads_back_to_the_same_bits(
+            coords in prop::collection::vec(coordinate(), 3..=90)
+        ) {
+            let x: Vec<Vec3> = coords
+                .chunks_exact(3)
+                .map(|c| Vec3::new(c[0], c[1], c[2]))
+                .collect();
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join("frame.obj");
+            write_obj(&path, &[points("p", x.clone())], &x).unwrap();
+            let back = read_obj(&path).unwrap();
+            prop_assert_eq!(back.positions.len(), x.len());
+            for (a, b) in x.iter().zip(&back.positions) {
+                for k in 0..3 {
+                    prop_assert_eq!(a[k].to_bits(), b[k].to_bits(), "{:?} came back as {:?}", a[k], b[k]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_reused_writer_gives_each_frame_the_bytes_of_a_fresh_one() {
+        let (cloths, frames) = crate::io::gltf::tests::sample_animation();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("frame.obj");
+        let mut w = ObjWriter::new(&cloths);
+        // the last frames first: frame 0 (the grid at rest) has the shortest numbers, so bytes
+        // left over from a longer frame would show
+        for x in frames.iter().rev() {
+            w.write(&path, x).unwrap();
+            assert_eq!(
+                std::fs::read_to_string(&path).unwrap(),
+                obj_text(&cloths, x).unwrap()
+            );
+        }
+        // the rope's segments come last, numbered over the whole file
+        let text = std::fs::read_to_string(&path).unwrap();
+        let tail: Vec<&str> = text.lines().rev().take(3).collect();
+        assert_eq!(tail, ["l 33 34", "l 32 33", "l 31 32"]);
+        let x = &frames[0][..frames[0].len() - 1];
+        let short = w.write(&path, x).unwrap_err().to_string();
+        assert!(
+            short.contains("cloth 'rope' needs particles 30..34"),
+            "{short}"
+        );
+    }
+
+    #[test]
+    fn tiny_and_huge_coordinates_have_exponents() {
+        let x = vec![Vec3::new(-1e-7, 2.5e-300, 1e21)];
+        let text = obj_text(&[points("p", x.clone())], &x).unwrap();
+        assert_eq!(text, "# drapery frame\no p\nv -1e-7 2.5e-300 1e+21\n");
     }
 }
