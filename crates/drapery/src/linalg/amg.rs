@@ -143,7 +143,7 @@ struct Level {
     x: Vec<Vec3>,
     w: Vec<Vec3>,
     /// Chunk sums of the products.
-    partial: Vec<f64>,
+    partial: Vec<[f64; 2]>,
 }
 
 impl Level {
@@ -256,9 +256,11 @@ impl Multigrid {
     /// product PCG needs, at about half the bytes of [`BlockMatrix::mul_vec`]. Call
     /// [`Multigrid::refresh`] first; the filter is the one given there.
     pub fn filtered_product(&mut self, x: &[Vec3], y: &mut [Vec3]) -> f64 {
-        let fine = &self.levels[0];
-        fine.sym
-            .mul_then(x, y, &mut self.partial, |i, ax| (ax, x[i].dot(ax)))
+        let fine = &mut self.levels[0];
+        let [sum, _] = fine
+            .sym
+            .mul_then(x, y, &mut fine.partial, |i, ax| (ax, [x[i].dot(ax), 0.0]));
+        sum
     }
 
     /// Number of levels, the finest included.
@@ -299,7 +301,6 @@ impl Multigrid {
             self.levels.push(next);
         }
         cycle::factor_coarsest(self);
-        numeric::upper_triangles(&mut self.levels);
     }
 }
 

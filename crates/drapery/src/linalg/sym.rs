@@ -106,35 +106,43 @@ impl SymBlockMatrix {
         });
     }
 
-    /// `y = A x`, then `y_i = finish(i, (A x)_i)` row by row; returns the sum of what
-    /// `finish` returned (added row by row within a chunk, then chunk by chunk), so a
-    /// following vector operation and a dot product fuse with the product. Same bits on any
+    /// The diagonal block of row `i`.
+    pub fn diag(&self, i: usize) -> &Mat3 {
+        &self.values[self.row_ptr[i] as usize]
+    }
+
+    /// `y = A x`, then `y_i = finish(i, (A x)_i).0` row by row; returns the sums of the `K`
+    /// numbers `finish` returned (added row by row within a chunk, then chunk by chunk), so a
+    /// following vector operation and dot products fuse with the product. Same bits on any
     /// number of threads. `partial` is scratch memory.
-    pub fn mul_then(
+    pub fn mul_then<const K: usize>(
         &self,
         x: &[Vec3],
         y: &mut [Vec3],
-        partial: &mut Vec<f64>,
-        finish: impl Fn(usize, Vec3) -> (Vec3, f64) + Sync,
-    ) -> f64 {
+        partial: &mut Vec<[f64; K]>,
+        finish: impl Fn(usize, Vec3) -> (Vec3, [f64; K]) + Sync,
+    ) -> [f64; K] {
         let n = self.n();
         assert!(x.len() == n && y.len() == n);
-        partial.resize(n.div_ceil(self.chunk), 0.0);
+        partial.resize(n.div_ceil(self.chunk), [0.0; K]);
         y.par_chunks_mut(self.chunk)
             .zip(partial.par_iter_mut())
             .enumerate()
             .for_each(|(c, (y, p))| *p = self.chunk_product(c * self.chunk, x, y, &finish));
-        partial.iter().sum()
+        partial.iter().fold([0.0; K], |mut acc, p| {
+            acc.iter_mut().zip(p).for_each(|(a, b)| *a += b);
+            acc
+        })
     }
 
     /// The rows `first..first + y.len()` of [`SymBlockMatrix::mul_then`].
-    fn chunk_product(
+    fn chunk_product<const K: usize>(
         &self,
         first: usize,
         x: &[Vec3],
         y: &mut [Vec3],
-        finish: &impl Fn(usize, Vec3) -> (Vec3, f64),
-    ) -> f64 {
+        finish: &impl Fn(usize, Vec3) -> (Vec3, [f64; K]),
+    ) -> [f64; K] {
         let end = first + y.len();
         y.iter_mut().for_each(|v| *v = Vec3::ZERO);
         for i in first..end {
@@ -150,7 +158,7 @@ impl SymBlockMatrix {
             }
             y[i - first] = acc;
         }
-        let mut sum = 0.0;
+        let mut sum = [0.0; K];
         for j in first..end {
             let mut acc = y[j - first];
             for e in self.remote_ptr[j] as usize..self.remote_ptr[j + 1] as usize {
@@ -159,7 +167,7 @@ impl SymBlockMatrix {
             }
             let (out, s) = finish(j, acc);
             y[j - first] = out;
-            sum += s;
+            sum.iter_mut().zip(s).for_each(|(a, b)| *a += b);
         }
         sum
     }
@@ -220,7 +228,7 @@ mod tests {
         let mut s = SymBlockMatrix::from_pattern(a);
         s.set_values(a);
         let mut y = vec![Vec3::ZERO; a.n()];
-        let dot = s.mul_then(x, &mut y, &mut Vec::new(), |i, v| (v, x[i].dot(v)));
+        let [dot] = s.mul_then(x, &mut y, &mut Vec::new(), |i, v| (v, [x[i].dot(v)]));
         (y, dot)
     }
 

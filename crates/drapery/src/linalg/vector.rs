@@ -58,25 +58,6 @@ pub fn chunked_sum2<A: Send, B: Send>(
     partial.iter().sum()
 }
 
-/// [`chunked_sum`] with two sums per chunk (each added in chunk order); `partial` is scratch.
-pub fn chunked_sum_pair<T: Send>(
-    y: &mut [T],
-    partial: &mut Vec<[f64; 2]>,
-    f: impl Fn(usize, &mut [T]) -> [f64; 2] + Sync,
-) -> [f64; 2] {
-    if y.len() <= CHUNK {
-        return f(0, y);
-    }
-    partial.resize(y.len().div_ceil(CHUNK), [0.0; 2]);
-    y.par_chunks_mut(CHUNK)
-        .zip(partial.par_iter_mut())
-        .enumerate()
-        .for_each(|(k, (c, p))| *p = f(k * CHUNK, c));
-    partial
-        .iter()
-        .fold([0.0; 2], |s, p| [s[0] + p[0], s[1] + p[1]])
-}
-
 /// `‖a‖₂`.
 pub fn norm(a: &[Vec3]) -> f64 {
     dot(a, a).sqrt()

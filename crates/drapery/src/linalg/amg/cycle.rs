@@ -57,8 +57,9 @@ fn cycle(levels: &mut [Level], coarse: &CoarseSolver, sweeps: usize) {
     // w = b - A x
     let (x, b) = (&lvl.x, &lvl.b);
     let rows = min_len(lvl.a.n());
-    lvl.sym
-        .mul_then(x, &mut lvl.w, &mut lvl.partial, |i, ax| (b[i] - ax, 0.0));
+    lvl.sym.mul_then(x, &mut lvl.w, &mut lvl.partial, |i, ax| {
+        (b[i] - ax, [0.0; 2])
+    });
     // b_c = Pᵀ w
     let w = &lvl.w;
     next.b
@@ -109,7 +110,7 @@ fn smooth_more(lvl: &mut Level, sweeps: usize) {
     for _ in 0..sweeps {
         let (x, b, dinv, omega) = (&lvl.x, &lvl.b, &lvl.dinv, lvl.omega);
         lvl.sym.mul_then(x, &mut lvl.w, &mut lvl.partial, |i, ax| {
-            (x[i] + omega * (dinv[i] * (b[i] - ax)), 0.0)
+            (x[i] + omega * (dinv[i] * (b[i] - ax)), [0.0; 2])
         });
         std::mem::swap(&mut lvl.x, &mut lvl.w);
     }

@@ -4,7 +4,7 @@
 
 use super::{AmgParams, Level, Multigrid, NONE, Transfer, WEAK, cycle, norm_inf, safe_inverse};
 use crate::linalg::bsr::{BlockMatrix, row_chunks};
-use crate::linalg::vector::chunked_sum_pair;
+use crate::linalg::sym::SymBlockMatrix;
 use crate::math::{Mat3, Vec3};
 use rayon::prelude::*;
 
@@ -24,14 +24,6 @@ pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3]) {
         }
     }
     cycle::factor_coarsest(mg);
-    upper_triangles(&mut mg.levels);
-}
-
-/// Copies every level's matrix into its upper-triangle storage.
-pub(super) fn upper_triangles(levels: &mut [Level]) {
-    for lvl in levels {
-        lvl.sym.set_values(&lvl.a);
-    }
 }
 
 /// `out = S A S + (I - S)` block by block (`out` has the pattern of `a`).
@@ -91,6 +83,7 @@ fn sym_inverse(d: &Mat3) -> Mat3 {
 /// overestimates `ρ` by 1.8–1.9× on the finest level of hanging sheets, and by more on some
 /// levels of a draped one, so damping by `G` smoothed far too weakly.
 pub(super) fn smoother(lvl: &mut Level, params: &AmgParams) {
+    lvl.sym.set_values(&lvl.a);
     let a = &lvl.a;
     lvl.dinv
         .par_iter_mut()
@@ -103,7 +96,13 @@ pub(super) fn smoother(lvl: &mut Level, params: &AmgParams) {
     } else {
         params.power_steps.max(20)
     };
-    let estimate = spectral_estimate(a, &lvl.dinv, steps, &mut lvl.w, &mut lvl.x);
+    let estimate = spectral_estimate(
+        &lvl.sym,
+        &lvl.dinv,
+        steps,
+        [&mut lvl.w, &mut lvl.x],
+        &mut lvl.partial,
+    );
     let rho = if estimate > 0.0 && estimate.is_finite() {
         estimate
     } else {
@@ -142,31 +141,26 @@ const COARSE_ROWS: usize = 256;
 /// so that its size stays put. The sums are chunked, so the result is the same on any thread
 /// count. `x` and `y` are work vectors of the level's size.
 fn spectral_estimate(
-    a: &BlockMatrix,
+    a: &SymBlockMatrix,
     dinv: &[Mat3],
     steps: usize,
-    x: &mut Vec<Vec3>,
-    y: &mut Vec<Vec3>,
+    [x, y]: [&mut Vec<Vec3>; 2],
+    partial: &mut Vec<[f64; 2]>,
 ) -> f64 {
     for (i, xi) in x.iter_mut().enumerate() {
         let h = (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
         let f = |k: u32| ((h >> k) & 0xffff) as f64 / 65535.0 - 0.5;
         *xi = Vec3::new(f(0), f(16), f(32));
     }
-    let mut partial = Vec::new();
     let (mut estimate, mut scale) = (0.0, 1.0);
     for _ in 0..steps {
-        let x_ = &*x;
-        let [num, den] = chunked_sum_pair(y.as_mut_slice(), &mut partial, |first, y| {
-            let (mut num, mut den) = (0.0, 0.0);
-            for (k, yi) in y.iter_mut().enumerate() {
-                let i = first + k;
-                let ax = a.row_product(i, x_);
-                num += x_[i].dot(ax);
-                den += x_[i].dot(a.values[a.diag_index(i)] * x_[i]);
-                *yi = scale * (dinv[i] * ax);
-            }
-            [num, den]
+        let x_ = &**x;
+        let [num, den] = a.mul_then(x_, y, partial, |i, ax| {
+            let xi = x_[i];
+            (
+                scale * (dinv[i] * ax),
+                [xi.dot(ax), xi.dot(*a.diag(i) * xi)],
+            )
         });
         let q = num / den;
         if !(q > 0.0 && q.is_finite()) {
