@@ -596,27 +596,28 @@ impl Simulation {
             let t1 = Instant::now();
             // Solve on an active set of the obstacle contacts (see `CONTACT_ROUNDS`).
             for round in 0..CONTACT_ROUNDS {
-                for i in 0..n {
-                    z[i] = if self.model.pinned[i] {
-                        -v[i]
-                    } else {
-                        Vec3::ZERO
-                    };
-                    self.filter[i] = if self.model.pinned[i] {
-                        Mat3::ZERO
-                    } else {
-                        Mat3::IDENTITY
-                    };
-                    // initial guess: the previous step's change, then the previous round's
-                    // solution (only the contacts that changed differ)
-                    if round == 0 {
-                        dv[i] = if it == 0 {
-                            self.warm_start.get(i).copied().unwrap_or(Vec3::ZERO)
+                let (pinned, warm) = (&self.model.pinned, &self.warm_start);
+                z.par_iter_mut()
+                    .zip(self.filter.par_iter_mut())
+                    .zip(dv.par_iter_mut())
+                    .enumerate()
+                    .with_min_len(PARTICLES)
+                    .for_each(|(i, ((zi, si), dvi))| {
+                        (*zi, *si) = if pinned[i] {
+                            (-v[i], Mat3::ZERO)
                         } else {
-                            Vec3::ZERO
+                            (Vec3::ZERO, Mat3::IDENTITY)
                         };
-                    }
-                }
+                        // initial guess: the previous step's change, then the previous round's
+                        // solution (only the contacts that changed differ)
+                        if round == 0 {
+                            *dvi = if it == 0 {
+                                warm.get(i).copied().unwrap_or(Vec3::ZERO)
+                            } else {
+                                Vec3::ZERO
+                            };
+                        }
+                    });
                 for (c, _) in candidates.iter().zip(&active).filter(|(_, a)| **a) {
                     hold(c, &v, &mut self.filter, &mut z);
                 }

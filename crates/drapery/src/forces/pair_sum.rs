@@ -54,14 +54,15 @@ impl Lists {
         Lists { ptr, src }
     }
 
+    /// Place `t`'s sum of `±term(s)`, in increasing entry order.
     #[inline]
-    fn gather<T>(&self, t: usize, terms: &[T], zero: T) -> T
+    fn gather<T>(&self, t: usize, term: impl Fn(usize) -> T, zero: T) -> T
     where
         T: Copy + std::ops::Add<Output = T> + std::ops::Sub<Output = T>,
     {
         let mut acc = zero;
         for &e in &self.src[self.ptr[t] as usize..self.ptr[t + 1] as usize] {
-            let term = terms[(e >> 1) as usize];
+            let term = term((e >> 1) as usize);
             acc = if e & 1 == 0 { acc + term } else { acc - term };
         }
         acc
@@ -75,12 +76,12 @@ struct State {
     /// Per stored block of a pattern.
     blocks: Option<(Weak<Pattern>, Lists)>,
     vectors: Vec<Vec3>,
-    pairs: Vec<VecPair>,
+    products: Vec<Vec3>,
     mats: Vec<Mat3>,
 }
 
-/// The two vector terms of a pair in [`PairSums::add_linearization`], summed componentwise
-/// (each component on its own, so each sum has the bits of a separate gather).
+/// The two vector terms of a pair in [`PairSums::add_linearization`], summed in one gather
+/// componentwise (each component on its own, so each sum has the bits of a separate gather).
 #[derive(Clone, Copy, Debug, Default)]
 struct VecPair(Vec3, Vec3);
 
@@ -169,7 +170,7 @@ fn evaluate<T: Send + Copy + Default>(
 fn gather_blocks(lists: &Lists, terms: &[Mat3], m: &mut BlockMatrix) {
     m.for_each_row_mut(|_, base, _, vals| {
         for (k, v) in vals.iter_mut().enumerate() {
-            *v += lists.gather(base + k, terms, Mat3::ZERO);
+            *v += lists.gather(base + k, |s| terms[s], Mat3::ZERO);
         }
     });
 }
@@ -189,7 +190,7 @@ impl PairSums {
         out.par_iter_mut()
             .enumerate()
             .with_min_len(512)
-            .for_each(|(p, o)| *o += lists.gather(p, terms, Vec3::ZERO));
+            .for_each(|(p, o)| *o += lists.gather(p, |s| terms[s], Vec3::ZERO));
     }
 
     /// Adds `B_s = term(s)` to blocks `(i, i)`, `(j, j)` and `-B_s` to `(i, j)`, `(j, i)` of
@@ -221,37 +222,43 @@ impl PairSums {
     {
         let mut guard = self.state.lock().unwrap_or_else(|e| e.into_inner());
         let st = &mut *guard;
-        let (pairs, mats) = (&mut st.pairs, &mut st.mats);
-        pairs.resize(i.len(), VecPair::default());
-        mats.resize(i.len(), Mat3::ZERO);
-        pairs
-            .par_iter_mut()
-            .zip(mats.par_iter_mut())
-            .enumerate()
-            .with_min_len(1024)
-            .for_each(|(s, (gp, b))| {
-                let (g, p, blk) = term(s);
-                *gp = VecPair(g, p);
-                *b = blk;
-            });
+        let pairs = i.len();
+        let (g, p, mats) = (&mut st.vectors, &mut st.products, &mut st.mats);
+        g.resize(pairs, Vec3::ZERO);
+        mats.resize(pairs, Mat3::ZERO);
         let lists = particle_lists(&mut st.particles, i, j, f.len());
-        let terms = &st.pairs;
         match out {
-            Some(out) => f
-                .par_iter_mut()
-                .zip(out.par_iter_mut())
-                .enumerate()
-                .with_min_len(512)
-                .for_each(|(q, (fq, oq))| {
-                    let sum = lists.gather(q, terms, VecPair::default());
-                    *fq += sum.0;
-                    *oq += sum.1;
-                }),
-            None => f
-                .par_iter_mut()
-                .enumerate()
-                .with_min_len(512)
-                .for_each(|(q, fq)| *fq += lists.gather(q, terms, VecPair::default()).0),
+            Some(out) => {
+                p.resize(pairs, Vec3::ZERO);
+                g.par_iter_mut()
+                    .zip(p.par_iter_mut())
+                    .zip(mats.par_iter_mut())
+                    .enumerate()
+                    .with_min_len(1024)
+                    .for_each(|(s, ((gs, ps), bs))| (*gs, *ps, *bs) = term(s));
+                let (g, p) = (&*g, &*p);
+                f.par_iter_mut()
+                    .zip(out.par_iter_mut())
+                    .enumerate()
+                    .with_min_len(512)
+                    .for_each(|(q, (fq, oq))| {
+                        let sum = lists.gather(q, |s| VecPair(g[s], p[s]), VecPair::default());
+                        *fq += sum.0;
+                        *oq += sum.1;
+                    });
+            }
+            None => {
+                g.par_iter_mut()
+                    .zip(mats.par_iter_mut())
+                    .enumerate()
+                    .with_min_len(1024)
+                    .for_each(|(s, (gs, bs))| (*gs, _, *bs) = term(s));
+                let g = &*g;
+                f.par_iter_mut()
+                    .enumerate()
+                    .with_min_len(512)
+                    .for_each(|(q, fq)| *fq += lists.gather(q, |s| g[s], Vec3::ZERO));
+            }
         }
         let lists = block_lists(&mut st.blocks, i, j, m);
         gather_blocks(lists, &st.mats, m);
