@@ -7,7 +7,9 @@
 //! every matrix block) gathers its own contributions in increasing pair order. No two tasks
 //! write the same place, and each sum has a fixed order, so the result is the same bits on any
 //! number of threads. The gather lists are built on first use and, for blocks, rebuilt when
-//! the matrix pattern changes.
+//! the matrix pattern changes. [`PairSums::add_linearization`] takes a force's two vectors
+//! (force and Jacobian product) and its block from one evaluation per pair: one term pass, one
+//! gather over particles for both vectors and one over blocks.
 
 use crate::linalg::BlockMatrix;
 use crate::linalg::bsr::Pattern;
