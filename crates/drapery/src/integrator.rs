@@ -19,12 +19,14 @@ use crate::collision::repulsion::Penalty;
 use crate::collision::response::{self, ObstacleContact};
 use crate::error::{Error, Result};
 use crate::forces::pair_sum::PairSums;
-use crate::forces::{AirDrag, Force, Gravity, Repulsions, SpringDamping, Springs};
+use crate::forces::{AirDrag, Force, Gravity, Linearization, Repulsions, SpringDamping, Springs};
 use crate::linalg::BlockMatrix;
 use crate::linalg::direct::DirectSolver;
 use crate::linalg::pcg::{self, PcgScratch, PcgSettings, Preconditioner};
 use crate::math::{Mat3, Vec3, outer};
 use crate::model::Model;
+use rayon::prelude::*;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Which linear solver handles the step's system.
@@ -136,11 +138,10 @@ pub struct Simulation {
     pub warm_start: Vec<Vec3>,
     forces: Vec<Box<dyn Force>>,
     base_pairs: Vec<(u32, u32)>,
-    /// Mass and model forces, on the fixed pattern of the model's forces.
+    /// Mass and model forces, on the fixed pattern of the model's forces, while contacts
+    /// enlarge the system matrix's pattern; without contacts `matrix` shares this pattern and
+    /// takes these values itself (see [`Self::base_is_system`]), and these are stale.
     base_matrix: BlockMatrix,
-    /// Whether the last assembly added contact blocks to `matrix` (otherwise it equals
-    /// `base_matrix`).
-    matrix_has_contacts: bool,
     /// Position in `matrix` of each block of `base_matrix` (when contacts enlarge the pattern).
     base_slots: Vec<u32>,
     /// What the preconditioner is built from while contacts enlarge the pattern: the base
@@ -193,6 +194,9 @@ struct StepBuffers {
 
 /// Ratio of kinetic energies across one step above which the step counts as a blow-up.
 const BLOWUP_RATIO: f64 = 1e4;
+
+/// Particles per task in the step's per-particle parallel loops.
+const PARTICLES: usize = 1024;
 
 impl Simulation {
     /// Prepares a simulation: builds the forces from the model, the matrix pattern and the
@@ -248,7 +252,6 @@ impl Simulation {
             steps: 0,
             forces,
             base_matrix: matrix.clone(),
-            matrix_has_contacts: false,
             base_slots: Vec::new(),
             precond_matrix: matrix.clone(),
             initial,
@@ -298,7 +301,15 @@ impl Simulation {
     pub fn assemble_matrix(&mut self, h: f64) {
         let (x, v) = (self.model.x.clone(), self.model.v.clone());
         self.use_contact_pattern(None);
-        self.assemble(&x, &v, h, None);
+        let at = Linearization {
+            x: &x,
+            v: &v,
+            matrix: (-h * h, -h),
+            // unused: only the matrix is assembled
+            product: (0.0, 0.0),
+            w: &v,
+        };
+        self.linearize(&at, None, None);
     }
 
     /// Gives the multigrid its reference (once, at the first step): the base system matrix
@@ -343,35 +354,52 @@ impl Simulation {
                     }
                 }
             }
-            None if !self.matrix.same_pattern(&self.base_matrix) => {
+            None if !self.base_is_system() => {
                 self.matrix = self.base_matrix.clone();
             }
             None => {}
         }
     }
 
-    /// Assembles `A = M - b D - a K` at `(x, v)` (with `a = h²`, `b = h`): the mass and the
-    /// model's forces on the base pattern, then, with contacts, into the enlarged system
-    /// matrix with the contact blocks added (and the preconditioner's matrix).
-    fn assemble(&mut self, x: &[Vec3], v: &[Vec3], h: f64, contact: Option<&Repulsions>) {
-        assemble_base(
-            &self.model.mass,
-            &self.forces,
-            x,
-            v,
-            h,
-            &mut self.base_matrix,
-        );
-        self.matrix_has_contacts = contact.is_some();
+    /// Whether the system matrix has the base pattern itself (no contacts this step): the
+    /// model's forces are then assembled straight into it, and `base_matrix` is left stale.
+    fn base_is_system(&self) -> bool {
+        Arc::ptr_eq(self.matrix.pattern(), self.base_matrix.pattern())
+    }
+
+    /// Assembles `A = M + a K + b D` at `(at.x, at.v)` with `(a, b) = at.matrix` (`-h²`,
+    /// `-h` in a step): the mass and the model's forces into the system matrix, or with
+    /// contacts into the base pattern and then into the enlarged system matrix with the contact
+    /// blocks added (and the preconditioner's matrix). With `vectors = (f, kw)`, also adds every
+    /// force (contacts last) to `f` and the products with `at.product` and `at.w` to `kw`, from
+    /// the same evaluation ([`Force::add_linearization`]).
+    fn linearize(
+        &mut self,
+        at: &Linearization,
+        contact: Option<&Repulsions>,
+        mut vectors: Option<(&mut [Vec3], &mut [Vec3])>,
+    ) {
+        let base = if contact.is_some() {
+            &mut self.base_matrix
+        } else {
+            &mut self.matrix
+        };
+        set_mass(&self.model.mass, base);
+        let mut add = |force: &dyn Force, m: &mut BlockMatrix| match &mut vectors {
+            Some((f, kw)) => force.add_linearization(at, f, m, kw),
+            None => force.add_jacobian(at.x, at.v, at.matrix.0, at.matrix.1, m),
+        };
+        for force in &self.forces {
+            add(force.as_ref(), base);
+        }
         let Some(c) = contact else {
-            self.matrix.values.copy_from_slice(&self.base_matrix.values);
             return;
         };
         self.matrix.clear();
         for (k, &slot) in self.base_slots.iter().enumerate() {
             self.matrix.values[slot as usize] = self.base_matrix.values[k];
         }
-        c.add_jacobian(x, v, -h * h, -h, &mut self.matrix);
+        add(c, &mut self.matrix);
         let p = &mut self.precond_matrix;
         p.values.copy_from_slice(&self.base_matrix.values);
         for i in 0..self.model.particle_count() {
@@ -540,48 +568,56 @@ impl Simulation {
         let newton = self.settings.newton_iterations;
         for it in 0..newton {
             let t0 = Instant::now();
-            f.iter_mut().for_each(|e| *e = Vec3::ZERO);
-            for force in all_forces(&self.forces, contact_force) {
-                force.add_force(&x, &v, &mut f);
-            }
-            self.assemble(&x, &v, h, contact_force);
-            // rhs = M (v0 - v) + h f + h K (x0 + h v - x)
-            for i in 0..n {
-                w[i] = x0[i] + h * v[i] - x[i];
-                rhs[i] = self.model.mass[i] * (v0[i] - v[i]) + h * f[i];
-            }
-            kw.iter_mut().for_each(|e| *e = Vec3::ZERO);
-            for force in all_forces(&self.forces, contact_force) {
-                force.add_jacobian_product(&x, &v, h, 0.0, &w, &mut kw);
-            }
-            for i in 0..n {
-                rhs[i] += kw[i];
-            }
+            // rhs = M (v0 - v) + h f + h K w with w = x0 + h v - x
+            w.par_iter_mut()
+                .zip(f.par_iter_mut())
+                .zip(kw.par_iter_mut())
+                .enumerate()
+                .with_min_len(PARTICLES)
+                .for_each(|(i, ((wi, fi), kwi))| {
+                    *wi = x0[i] + h * v[i] - x[i];
+                    *fi = Vec3::ZERO;
+                    *kwi = Vec3::ZERO;
+                });
+            let at = Linearization {
+                x: &x,
+                v: &v,
+                matrix: (-h * h, -h),
+                product: (h, 0.0),
+                w: &w,
+            };
+            self.linearize(&at, contact_force, Some((&mut f, &mut kw)));
+            let mass = &self.model.mass;
+            rhs.par_iter_mut()
+                .enumerate()
+                .with_min_len(PARTICLES)
+                .for_each(|(i, r)| *r = mass[i] * (v0[i] - v[i]) + h * f[i] + kw[i]);
             report.assembly_seconds += t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
             // Solve on an active set of the obstacle contacts (see `CONTACT_ROUNDS`).
             for round in 0..CONTACT_ROUNDS {
-                for i in 0..n {
-                    z[i] = if self.model.pinned[i] {
-                        -v[i]
-                    } else {
-                        Vec3::ZERO
-                    };
-                    self.filter[i] = if self.model.pinned[i] {
-                        Mat3::ZERO
-                    } else {
-                        Mat3::IDENTITY
-                    };
-                    // initial guess: the previous step's change, then the previous round's
-                    // solution (only the contacts that changed differ)
-                    if round == 0 {
-                        dv[i] = if it == 0 {
-                            self.warm_start.get(i).copied().unwrap_or(Vec3::ZERO)
+                let (pinned, warm) = (&self.model.pinned, &self.warm_start);
+                z.par_iter_mut()
+                    .zip(self.filter.par_iter_mut())
+                    .zip(dv.par_iter_mut())
+                    .enumerate()
+                    .with_min_len(PARTICLES)
+                    .for_each(|(i, ((zi, si), dvi))| {
+                        (*zi, *si) = if pinned[i] {
+                            (-v[i], Mat3::ZERO)
                         } else {
-                            Vec3::ZERO
+                            (Vec3::ZERO, Mat3::IDENTITY)
                         };
-                    }
-                }
+                        // initial guess: the previous step's change, then the previous round's
+                        // solution (only the contacts that changed differ)
+                        if round == 0 {
+                            *dvi = if it == 0 {
+                                warm.get(i).copied().unwrap_or(Vec3::ZERO)
+                            } else {
+                                Vec3::ZERO
+                            };
+                        }
+                    });
                 for (c, _) in candidates.iter().zip(&active).filter(|(_, a)| **a) {
                     hold(c, &v, &mut self.filter, &mut z);
                 }
@@ -827,7 +863,7 @@ impl Simulation {
     ) -> Result<()> {
         match self.settings.linear_solver {
             LinearSolver::Pcg => {
-                let p = if !self.matrix_has_contacts {
+                let p = if self.base_is_system() {
                     // the same matrix: PCG then multiplies by the multigrid's compact copy
                     &self.matrix
                 } else if self.matrix.same_pattern(&self.base_matrix) {
@@ -891,14 +927,15 @@ fn assemble_base(
     h: f64,
     m: &mut BlockMatrix,
 ) {
-    m.clear();
-    for (i, mi) in mass.iter().enumerate() {
-        let k = m.diag_index(i);
-        m.values[k] = Mat3::from_diagonal(Vec3::splat(*mi));
-    }
+    set_mass(mass, m);
     for f in forces {
         f.add_jacobian(x, v, -h * h, -h, m);
     }
+}
+
+/// Sets `m` to the mass matrix (on `m`'s pattern).
+fn set_mass(mass: &[f64], m: &mut BlockMatrix) {
+    m.set_block_diagonal(|i| Mat3::from_diagonal(Vec3::splat(mass[i])));
 }
 
 /// The model's forces plus this step's contact force, if any.

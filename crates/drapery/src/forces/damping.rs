@@ -6,8 +6,8 @@
 //! it out of the matrix, and so does drapery unless `position_jacobian` is set (which then
 //! needs the direct solver's LU).
 
-use super::Force;
 use super::pair_sum::PairSums;
+use super::{Force, Linearization};
 use crate::linalg::BlockMatrix;
 use crate::math::{Mat3, Vec3, outer};
 
@@ -46,17 +46,36 @@ impl SpringDamping {
         -(c / l) * (Mat3::from_diagonal(Vec3::splat(un)) + outer(n, u) - 2.0 * un * outer(n, n))
     }
 
-    /// Block `(i, i)` of `a ∂f/∂x + b ∂f/∂v` for spring `s` (the others follow by ±).
+    /// Block `(i, i)` of `a ∂f/∂x + b ∂f/∂v` for a spring of coefficient `c` with geometry
+    /// `g` from [`Self::geom`] (the other blocks follow by ±).
     #[inline]
-    fn block(&self, s: usize, x: &[Vec3], v: &[Vec3], a: f64, b: f64) -> Mat3 {
-        let Some((n, l, u)) = self.geom(s, x, v) else {
+    fn block_at(&self, g: Option<(Vec3, f64, Vec3)>, c: f64, a: f64, b: f64) -> Mat3 {
+        let Some((n, l, u)) = g else {
             return Mat3::ZERO;
         };
-        let mut blk = -(b * self.c[s]) * outer(n, n);
+        let mut blk = -(b * c) * outer(n, n);
         if self.position_jacobian && a != 0.0 {
-            blk += a * self.dfdx(n, l, u, self.c[s]);
+            blk += a * self.dfdx(n, l, u, c);
         }
         blk
+    }
+
+    /// Block `(i, i)` of `a ∂f/∂x + b ∂f/∂v` for spring `s`.
+    #[inline]
+    fn block(&self, s: usize, x: &[Vec3], v: &[Vec3], a: f64, b: f64) -> Mat3 {
+        self.block_at(self.geom(s, x, v), self.c[s], a, b)
+    }
+
+    /// Force on particle i of a spring of coefficient `c` with geometry `g`.
+    #[inline]
+    fn force_at(g: Option<(Vec3, f64, Vec3)>, c: f64) -> Vec3 {
+        g.map_or(Vec3::ZERO, |(n, _, u)| -c * u.dot(n) * n)
+    }
+
+    /// Whether `a ∂f/∂x + b ∂f/∂v` can be non-zero: without the position Jacobian, `b = 0`
+    /// leaves nothing (the product is then skipped: it would add only zeros).
+    fn has_jacobian(&self, a: f64, b: f64) -> bool {
+        b != 0.0 || (self.position_jacobian && a != 0.0)
     }
 }
 
@@ -73,10 +92,7 @@ impl Force for SpringDamping {
             .sum()
     }
     fn add_force(&self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]) {
-        let force = |s: usize| {
-            self.geom(s, x, v)
-                .map_or(Vec3::ZERO, |(n, _, u)| -self.c[s] * u.dot(n) * n)
-        };
+        let force = |s: usize| Self::force_at(self.geom(s, x, v), self.c[s]);
         self.sums.add_vectors(&self.i, &self.j, force, f);
     }
     fn add_pattern(&self, pairs: &mut Vec<(u32, u32)>) {
@@ -95,9 +111,35 @@ impl Force for SpringDamping {
         w: &[Vec3],
         out: &mut [Vec3],
     ) {
+        if !self.has_jacobian(a, b) {
+            return;
+        }
         let (i, j) = (&self.i, &self.j);
         let product = |s: usize| self.block(s, x, v, a, b) * (w[i[s] as usize] - w[j[s] as usize]);
         self.sums.add_vectors(i, j, product, out);
+    }
+    /// One geometry per spring for the force, the matrix block and the product.
+    fn add_linearization(
+        &self,
+        at: &Linearization,
+        f: &mut [Vec3],
+        m: &mut BlockMatrix,
+        out: &mut [Vec3],
+    ) {
+        let (i, j, x, v, w) = (&self.i, &self.j, at.x, at.v, at.w);
+        let ((am, bm), (ap, bp)) = (at.matrix, at.product);
+        let with_product = self.has_jacobian(ap, bp);
+        let term = |s: usize| {
+            let (g, c) = (self.geom(s, x, v), self.c[s]);
+            let p = if with_product {
+                self.block_at(g, c, ap, bp) * (w[i[s] as usize] - w[j[s] as usize])
+            } else {
+                Vec3::ZERO
+            };
+            (Self::force_at(g, c), p, self.block_at(g, c, am, bm))
+        };
+        let out = with_product.then_some(out);
+        self.sums.add_linearization(i, j, term, f, out, m);
     }
 }
 
@@ -151,6 +193,40 @@ mod tests {
             let fd = fd_jacobian(&d, &x, &v, false);
             prop_assert!(rel_diff(&got, &fd) < 1e-6, "{}", rel_diff(&got, &fd));
             prop_assert!(check_product(&d, &x, &v, 0.3, -2.0, &v) < 1e-12);
+        }
+
+        /// The fused evaluation against the three calls, bit for bit, with and without the
+        /// position Jacobian, a product with `b = 0` (skipped without it) and (`collapse`) a
+        /// spring of zero length.
+        #[test]
+        fn damping_linearization_has_the_bits_of_the_separate_calls(
+            (mut x, v, mut d) in config(),
+            position_jacobian in any::<bool>(),
+            collapse in any::<bool>(),
+            a in -2.0..2.0f64,
+            b in -2.0..2.0f64,
+            product_b in prop::sample::select(vec![0.0, 1.0]),
+            w in prop::collection::vec(vec3(1.0), 3),
+        ) {
+            d.position_jacobian = position_jacobian;
+            if collapse {
+                x[2] = x[0];
+            }
+            let at = Linearization { x: &x, v: &v, matrix: (a, b), product: (b, product_b * a), w: &w };
+            prop_assert!(linearization_is_bitwise_separate(&d, &at, &w));
+        }
+
+        #[test]
+        fn damping_linearization_matrix_matches_central_differences((x, v, d) in config()) {
+            let got = linearized(&d, &x, &v, 0.7, -1.3);
+            let fd_x = fd_jacobian(&d, &x, &v, false);
+            let fd_v = fd_jacobian(&d, &x, &v, true);
+            let fd: Vec<Vec<f64>> = fd_x
+                .iter()
+                .zip(&fd_v)
+                .map(|(rx, rv)| rx.iter().zip(rv).map(|(p, q)| 0.7 * p - 1.3 * q).collect())
+                .collect();
+            prop_assert!(rel_diff(&got, &fd) < 1e-6, "{}", rel_diff(&got, &fd));
         }
 
         #[test]

@@ -6,8 +6,8 @@
 //! `K_ij = K_ji = +H`. With `clamp_compression`, the matrix (never the force) uses
 //! `max(0, 1 - L/ℓ)` so that `-K` stays positive semi-definite (Choi & Ko 2002).
 
-use super::Force;
 use super::pair_sum::PairSums;
+use super::{Force, Linearization, linearize_separately};
 use crate::linalg::BlockMatrix;
 use crate::math::{Mat3, Vec3, outer};
 
@@ -99,6 +99,27 @@ impl Force for Springs {
             out,
         );
     }
+    /// One evaluation per spring: the force, `-a H` for the matrix and `-a H (w_i - w_j)` for
+    /// the product come from the same `(f, H)`.
+    fn add_linearization(
+        &self,
+        at: &Linearization,
+        f: &mut [Vec3],
+        m: &mut BlockMatrix,
+        out: &mut [Vec3],
+    ) {
+        let (am, ap) = (at.matrix.0, at.product.0);
+        if am == 0.0 || ap == 0.0 {
+            return linearize_separately(self, at, f, m, out);
+        }
+        let (i, j, x, w) = (&self.i, &self.j, at.x, at.w);
+        let term = |s: usize| {
+            let (g, h) = self.eval(s, x);
+            let p = -ap * (h * (w[i[s] as usize] - w[j[s] as usize]));
+            (g, p, -am * h)
+        };
+        self.sums.add_linearization(i, j, term, f, Some(out), m);
+    }
 }
 
 #[cfg(test)]
@@ -162,6 +183,28 @@ mod tests {
             let fd = fd_jacobian(&s, &x, &v, false);
             prop_assert!(rel_diff(&got, &fd) < 1e-6, "rel diff {}", rel_diff(&got, &fd));
             prop_assert!(check_product(&s, &x, &v, 1.0, 0.0, &x) < 1e-12);
+            // the fused evaluation's matrix
+            let fused = linearized(&s, &x, &v, 1.0, 0.0);
+            prop_assert!(rel_diff(&fused, &fd) < 1e-6, "rel diff {}", rel_diff(&fused, &fd));
+        }
+
+        /// The fused evaluation against the three calls, bit for bit, with the compression
+        /// clamp on or off and (`collapse`) a spring of zero length.
+        #[test]
+        fn spring_linearization_has_the_bits_of_the_separate_calls(
+            (mut x, mut s) in config(),
+            clamp in any::<bool>(),
+            collapse in any::<bool>(),
+            a in -2.0..2.0f64,
+            b in -2.0..2.0f64,
+            w in prop::collection::vec(vec3(), 4),
+        ) {
+            s.clamp_compression = clamp;
+            if collapse {
+                x[3] = x[1];
+            }
+            let at = Linearization { x: &x, v: &w, matrix: (a, b), product: (b, a), w: &w };
+            prop_assert!(linearization_is_bitwise_separate(&s, &at, &w));
         }
 
         #[test]

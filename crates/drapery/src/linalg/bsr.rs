@@ -108,7 +108,23 @@ impl BlockMatrix {
 
     /// Sets every value to zero.
     pub fn clear(&mut self) {
-        self.values.iter_mut().for_each(|m| *m = Mat3::ZERO);
+        self.values
+            .par_iter_mut()
+            .with_min_len(16 * ROWS)
+            .for_each(|m| *m = Mat3::ZERO);
+    }
+
+    /// Sets block `(i, i)` to `diag(i)` and every other block to zero, row-parallel.
+    pub fn set_block_diagonal<F>(&mut self, diag: F)
+    where
+        F: Fn(usize) -> Mat3 + Sync,
+    {
+        let pattern = Arc::clone(&self.pattern);
+        let d = &pattern.diag;
+        self.for_each_row_mut(|i, first, _, vals| {
+            vals.fill(Mat3::ZERO);
+            vals[d[i] as usize - first] = diag(i);
+        });
     }
 
     /// Adds `m` to block `(i, j)`. Panics if the block is not in the pattern (a bug in
