@@ -18,8 +18,8 @@
 //!   (weights: [`AmgParams`]).
 //! * **Coarse operators.** Galerkin, `A_c = Pᵀ A P`, recursively until at most
 //!   [`AmgParams::coarse_size`] particles remain; the coarsest is solved by dense Cholesky.
-//! * **Cycle** ([`cycle`]). A V-cycle with the same number of damped block-Jacobi sweeps before
-//!   and after the coarse correction, so it is a symmetric positive definite operator and CG
+//! * **Cycle** ([`cycle`]). A W-cycle (or V-cycle) with the same number of damped block-Jacobi
+//!   sweeps before and after the coarse correction, so it is a symmetric positive definite operator and CG
 //!   stays valid.
 //!
 //! The structure (aggregates, patterns of `P`, `A P` and `A_c`, and the position of every
@@ -50,6 +50,12 @@ pub struct AmgParams {
     pub max_levels: usize,
     /// Block-Jacobi sweeps before, and again after, the coarse correction.
     pub sweeps: usize,
+    /// Cycles of the coarser levels per coarse correction (`γ`): 1 for a V-cycle, 2 for a
+    /// W-cycle; only on levels whose coarser level has at least
+    /// [`AmgParams::repeat_rows`] rows (a V-cycle below).
+    pub coarse_cycles: usize,
+    /// Smallest coarse level that is visited `coarse_cycles` times per correction.
+    pub repeat_rows: usize,
     /// Smoother damping `ω = smoother_weight / ρ̄`, `ρ̄` an estimate of `ρ(D⁻¹A)` (see
     /// [`AmgParams::power_steps`]); `ω ρ` must stay below 2 for the cycle to be positive
     /// definite.
@@ -70,6 +76,13 @@ impl Default for AmgParams {
             coarse_size: 48,
             max_levels: 12,
             sweeps: 1,
+            // a W-cycle: on the hanging 64² and 128² cloths it takes 15.0 and 15.9 CG
+            // iterations per step where the V-cycle took 18.4 and 20.6. A second visit of the
+            // first coarse level costs 15 % more per cycle at 128² (2783 coarse rows), which
+            // pays, but 49 % at 64² (704 rows, two threads), where small loops cost more than
+            // their work, which does not.
+            coarse_cycles: 2,
+            repeat_rows: 1024,
             // ω ρ = 1.5 with the estimated ρ: 24.6 → 18.5 CG iterations per step on the
             // hanging 64² cloth and 94 → 23 on the draped one against ω = 1.7 / G (ω ρ ≈ 0.9)
             smoother_weight: 1.5,
@@ -138,10 +151,12 @@ struct Level {
     omega: f64,
     /// To the next coarser level; `None` on the coarsest.
     transfer: Option<Transfer>,
-    /// Cycle vectors: right-hand side, iterate, work.
+    /// Cycle vectors: right-hand side, iterate, work, and the previous cycles' sum on a
+    /// coarse level visited more than once.
     b: Vec<Vec3>,
     x: Vec<Vec3>,
     w: Vec<Vec3>,
+    y: Vec<Vec3>,
     /// Chunk sums of the products.
     partial: Vec<[f64; 2]>,
 }
@@ -158,6 +173,7 @@ impl Level {
             b: vec![Vec3::ZERO; n],
             x: vec![Vec3::ZERO; n],
             w: vec![Vec3::ZERO; n],
+            y: vec![Vec3::ZERO; n],
             partial: Vec::new(),
         }
     }

@@ -1,12 +1,17 @@
-//! The V-cycle and the dense Cholesky solve of the coarsest level.
+//! The cycle and the dense Cholesky solve of the coarsest level.
 //!
 //! On a level with matrix `A`, right-hand side `b`: `ν` damped block-Jacobi sweeps from
-//! `x = 0`, restriction of the residual `Pᵀ (b - A x)`, the cycle on the coarser level,
-//! `x += P x_c`, and `ν` sweeps again. The Jacobi sweep is self-adjoint in the `A` inner
-//! product, so the cycle is a symmetric operator; it is positive definite because the damping
-//! keeps `ω ρ(D⁻¹A) < 2`.
+//! `x = 0`, restriction of the residual `Pᵀ (b - A x)`, the coarse correction, `x += P x_c`,
+//! and `ν` sweeps again. The coarse correction solves `A_c x_c = b_c` by `γ` cycles of the
+//! coarser levels (`γ` = [`AmgParams::coarse_cycles`] on large enough levels, 1 otherwise;
+//! 1 is a V-cycle, 2 a W-cycle), each from the residual the previous one left, or exactly on
+//! the coarsest level. The Jacobi
+//! sweep is self-adjoint in the `A` inner product, so the cycle is a symmetric operator; it is
+//! positive definite because the damping keeps `ω ρ(D⁻¹A) < 2`, which makes every cycle a
+//! convergent iteration, and `γ` steps of a convergent iteration with a symmetric positive
+//! definite operator `B` give the symmetric positive definite `I - (I - B A)^γ` times `A⁻¹`.
 
-use super::{CoarseSolver, Level, Multigrid};
+use super::{AmgParams, CoarseSolver, Level, Multigrid};
 use crate::linalg::vector::chunked_sum;
 use crate::math::{Mat3, Vec3};
 use rayon::prelude::*;
@@ -24,10 +29,9 @@ fn min_len(n: usize) -> usize {
 
 /// `out = S V(r)`; returns `rᵀ out` (a deterministic chunked sum).
 pub(super) fn apply(mg: &mut Multigrid, s: &[Mat3], r: &[Vec3], out: &mut [Vec3]) -> f64 {
-    let sweeps = mg.params.sweeps;
     let fine = &mut mg.levels[0];
     fine.b.copy_from_slice(r);
-    cycle(&mut mg.levels, &mg.coarse, sweeps);
+    cycle(&mut mg.levels, &mg.coarse, &mg.params);
     let x = &mg.levels[0].x;
     chunked_sum(out, &mut mg.partial, |first, out| {
         let mut acc = 0.0;
@@ -40,8 +44,9 @@ pub(super) fn apply(mg: &mut Multigrid, s: &[Mat3], r: &[Vec3], out: &mut [Vec3]
     })
 }
 
-/// One V-cycle from `levels[0]` down: reads `levels[0].b`, writes `levels[0].x`.
-fn cycle(levels: &mut [Level], coarse: &CoarseSolver, sweeps: usize) {
+/// One cycle from `levels[0]` down: reads `levels[0].b`, writes `levels[0].x`.
+fn cycle(levels: &mut [Level], coarse: &CoarseSolver, params: &AmgParams) {
+    let sweeps = params.sweeps;
     let (lvl, rest) = levels.split_first_mut().expect("a level");
     // moved out for the duration of the cycle so that the level's vectors can be borrowed
     let Some(t) = lvl.transfer.take() else {
@@ -73,7 +78,25 @@ fn cycle(levels: &mut [Level], coarse: &CoarseSolver, sweeps: usize) {
             }
             *bc = acc;
         });
-    cycle(rest, coarse, sweeps);
+    cycle(rest, coarse, params);
+    // the coarsest level's solve is exact: no second pass
+    let repeat = rest.len() > 1 && rest[0].a.n() >= params.repeat_rows;
+    for _ in 1..if repeat { params.coarse_cycles } else { 1 } {
+        // x_c += cycle(b_c - A_c x_c)
+        let c = &mut rest[0];
+        let (x, b) = (&c.x, &c.b);
+        c.sym
+            .mul_then(x, &mut c.w, &mut c.partial, |i, ax| (b[i] - ax, [0.0; 2]));
+        std::mem::swap(&mut c.b, &mut c.w);
+        std::mem::swap(&mut c.x, &mut c.y);
+        cycle(rest, coarse, params);
+        let c = &mut rest[0];
+        let y = &c.y;
+        c.x.par_iter_mut()
+            .zip(y.par_iter())
+            .with_min_len(min_len(y.len()))
+            .for_each(|(x, y)| *x += *y);
+    }
     // x += P x_c
     let xc = &rest[0].x;
     lvl.x

@@ -72,11 +72,25 @@ fn the_hierarchy_coarsens_a_cloth_to_a_small_dense_level() {
 
 #[test]
 fn the_v_cycle_is_symmetric_and_positive_definite() {
+    cycle_is_symmetric_and_positive_definite(1);
+}
+
+#[test]
+fn the_w_cycle_is_symmetric_and_positive_definite() {
+    cycle_is_symmetric_and_positive_definite(2);
+}
+
+/// On a 32² cloth with pins and plane contacts, with `coarse_cycles` visits of every coarse
+/// level but the coarsest: `wᵀ B u = uᵀ B w` and `uᵀ B u > 0` for random filtered `u`, `w`.
+fn cycle_is_symmetric_and_positive_definite(coarse_cycles: usize) {
     let a = cloth_matrix(32, 3);
     let n = a.n();
     let s = mixed_filter(n, 32);
     let mut mg = Multigrid::default();
+    mg.params.coarse_cycles = coarse_cycles;
+    mg.params.repeat_rows = 0;
     mg.refresh(&a, &s);
+    assert!(mg.level_count() >= 3, "{:?}", mg.level_sizes());
     let mut rng = Rng(5);
     let filt = |v: Vec<Vec3>| -> Vec<Vec3> { v.iter().zip(&s).map(|(x, m)| *m * *x).collect() };
     for _ in 0..10 {
@@ -168,7 +182,34 @@ fn refreshing_the_values_equals_building_afresh() {
     assert!(dot(&r, &x1) > 0.0 && dot(&r, &x2) > 0.0);
 }
 
+/// A hanging `side²` cloth's matrix after `steps` steps, [`mixed_filter`], a random
+/// right-hand side from `seed` and zero prescribed values.
+fn system(side: usize, steps: usize, seed: u64) -> (BlockMatrix, Vec<Mat3>, Vec<Vec3>, Vec<Vec3>) {
+    let a = cloth_matrix(side, steps);
+    let n = a.n();
+    (
+        a,
+        mixed_filter(n, side),
+        Rng(seed).vecs(n),
+        vec![Vec3::ZERO; n],
+    )
+}
+
+/// PCG on the filtered system from a zero guess.
 fn solve(
+    a: &BlockMatrix,
+    b: &[Vec3],
+    s: &[Mat3],
+    z: &[Vec3],
+    p: Preconditioner,
+    tol: f64,
+) -> (Vec<Vec3>, pcg::SolveStats) {
+    solve_in(&mut PcgScratch::default(), a, b, s, z, p, tol)
+}
+
+/// [`solve`] with the given scratch (and so the multigrid parameters set in it).
+fn solve_in(
+    scratch: &mut PcgScratch,
     a: &BlockMatrix,
     b: &[Vec3],
     s: &[Mat3],
@@ -182,7 +223,7 @@ fn solve(
         max_iterations: 20000,
         preconditioner: p,
     };
-    let st = pcg::solve(a, b, s, z, &mut x, &settings, &mut PcgScratch::default());
+    let st = pcg::solve(a, b, s, z, &mut x, &settings, scratch);
     (x, st)
 }
 
@@ -213,11 +254,8 @@ fn multigrid_pcg_agrees_with_the_direct_solve_on_a_filtered_cloth_system() {
 
 #[test]
 fn multigrid_takes_far_fewer_iterations_than_block_jacobi_on_a_64x64_cloth() {
-    let a = cloth_matrix(64, 1);
+    let (a, s, b, z) = system(64, 1, 11);
     let n = a.n();
-    let s = mixed_filter(n, 64);
-    let b = Rng(11).vecs(n);
-    let z = vec![Vec3::ZERO; n];
     let (xj, jac) = solve(&a, &b, &s, &z, Preconditioner::BlockJacobi, 1e-8);
     let (xm, mg) = solve(&a, &b, &s, &z, Preconditioner::Multigrid, 1e-8);
     assert!(jac.converged && mg.converged);
@@ -310,5 +348,34 @@ fn every_coarse_operator_is_the_galerkin_product_of_the_finer_one() {
         }
         // computed as the upper triangle and its transpose: exactly symmetric
         assert_eq!(coarse.a.asymmetry(), 0.0);
+    }
+}
+
+#[test]
+fn the_w_cycle_takes_fewer_cg_iterations_to_the_same_solution() {
+    let (a, s, b, z) = system(48, 3, 13);
+    let run = |coarse_cycles| {
+        let mut scratch = PcgScratch::default();
+        let mg = scratch.multigrid();
+        mg.params.coarse_cycles = coarse_cycles;
+        mg.params.repeat_rows = 0;
+        mg.params.strength = 0.08;
+        let (x, st) = solve_in(
+            &mut scratch,
+            &a,
+            &b,
+            &s,
+            &z,
+            Preconditioner::Multigrid,
+            1e-8,
+        );
+        assert!(st.converged, "{st:?}");
+        (x, st.iterations)
+    };
+    let ((xv, v), (xw, w)) = (run(1), run(2));
+    assert!(w * 10 <= v * 9, "W-cycle {w} iterations, V-cycle {v}");
+    let scale = xv.iter().fold(0.0f64, |m, v| m.max(v.length()));
+    for (p, q) in xv.iter().zip(&xw) {
+        assert!((*p - *q).length() <= 1e-5 * scale);
     }
 }
