@@ -1,4 +1,5 @@
-//! Kernel micro-benchmarks (divan) for regression tracking: assembly, block SpMV, one
+//! Kernel micro-benchmarks (divan) for regression tracking: assembly, block SpMV (full and
+//! upper-triangle storage), one
 //! multigrid V-cycle, the multigrid's value refresh, one PCG solve, the broad phase, and two memory-bandwidth references
 //! (a read-only sum and a STREAM-style triad over arrays much larger than the caches) to
 //! compare the SpMV's bytes per second with. Run with `cargo bench --bench kernels`; the
@@ -11,6 +12,7 @@ use drapery::collision::broad_phase::candidates;
 use drapery::linalg::BlockMatrix;
 use drapery::linalg::amg::Multigrid;
 use drapery::linalg::pcg::{self, PcgScratch, PcgSettings, Preconditioner};
+use drapery::linalg::sym::SymBlockMatrix;
 use drapery::math::Vec3;
 use drapery::presets::Preset;
 use rayon::prelude::*;
@@ -60,6 +62,23 @@ fn spmv(bencher: Bencher, n: usize) {
     bencher
         .counter(BytesCount::new(spmv_bytes(a)))
         .bench_local(|| in_pool(|| a.mul_vec(divan::black_box(&x), &mut y)));
+}
+
+/// The product through the upper triangle ([`SymBlockMatrix`], what PCG and the multigrid
+/// use); bytes counted as its blocks and column indices, row offsets, `x` and `y`.
+#[divan::bench(args = [64, 128, 256])]
+fn sym_spmv(bencher: Bencher, n: usize) {
+    let sim = hang(n);
+    let a = sim.matrix();
+    let mut sym = SymBlockMatrix::from_pattern(a);
+    sym.set_values(a);
+    let x: Vec<Vec3> = sim.model.v.clone();
+    let mut y = vec![Vec3::ZERO; a.n()];
+    let mut partial = Vec::new();
+    let bytes = sym.nnz_blocks() * (72 + 4) + (a.n() + 1) * 4 + 2 * a.n() * 24;
+    bencher.counter(BytesCount::new(bytes)).bench_local(|| {
+        in_pool(|| sym.mul_then(divan::black_box(&x), &mut y, &mut partial, |_, v| (v, [])))
+    });
 }
 
 #[divan::bench(args = [64, 128, 256])]

@@ -25,13 +25,15 @@ pub enum Error {
         /// What went wrong and where.
         reason: String,
     },
-    /// An I/O error on a named file.
-    #[error("{path}: {source}")]
+    /// An I/O error on a named file. The message includes the underlying error's, which is
+    /// therefore not also given as [`std::error::Error::source`] (an error chain printed
+    /// whole would repeat it).
+    #[error("{path}: {cause}")]
     Io {
         /// The file that could not be read or written.
         path: String,
         /// The underlying error.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
 }
 
@@ -44,13 +46,31 @@ impl Error {
         }
     }
     /// Shorthand for an [`Error::Io`].
-    pub fn io(path: impl std::fmt::Display, source: std::io::Error) -> Self {
+    pub fn io(path: impl std::fmt::Display, cause: std::io::Error) -> Self {
         Error::Io {
             path: path.to_string(),
-            source,
+            cause,
         }
     }
 }
 
 /// Result alias used across the crate.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_io_error_names_the_file_and_its_cause_once() {
+        let e = Error::io("frames/f.obj", std::io::Error::other("disk on fire"));
+        let mut text = e.to_string();
+        // what a caller printing the whole chain (anyhow's `{:#}`) would add
+        let mut next = std::error::Error::source(&e);
+        while let Some(s) = next {
+            text += &format!(": {s}");
+            next = s.source();
+        }
+        assert_eq!(text, "frames/f.obj: disk on fire");
+    }
+}

@@ -350,9 +350,9 @@ impl Scene {
                 (Some(m), None) => {
                     let mesh_path = dir.join(m);
                     crate::io::obj::read_obj(&mesh_path).map_err(|e| match e {
-                        Error::Io { path: p, source } => Error::input(
+                        Error::Io { path: p, cause } => Error::input(
                             path.display(),
-                            format!("{what}mesh: cannot read '{p}': {source}"),
+                            format!("{what}mesh: cannot read '{p}': {cause}"),
                         ),
                         other => other,
                     })?
@@ -658,9 +658,9 @@ fn obstacle(
             let name = c.mesh.as_ref().ok_or_else(|| need("mesh"))?;
             let mesh_path = dir.join(name);
             let mesh = crate::io::obj::read_obj(&mesh_path).map_err(|e| match e {
-                Error::Io { path: p, source } => Error::input(
+                Error::Io { path: p, cause } => Error::input(
                     path.display(),
-                    format!("{what}mesh: cannot read '{p}': {source}"),
+                    format!("{what}mesh: cannot read '{p}': {cause}"),
                 ),
                 other => other,
             })?;
