@@ -79,23 +79,31 @@ fn cycle(levels: &mut [Level], coarse: &CoarseSolver, params: &AmgParams) {
             *bc = acc;
         });
     cycle(rest, coarse, params);
-    // the coarsest level's solve is exact: no second pass
+    // more cycles from the residual each leaves (the coarsest level's solve is exact)
     let repeat = rest.len() > 1 && rest[0].a.n() >= params.repeat_rows;
-    for _ in 1..if repeat { params.coarse_cycles } else { 1 } {
-        // x_c += cycle(b_c - A_c x_c)
+    let gamma = if repeat {
+        params.coarse_cycles.max(1)
+    } else {
+        1
+    };
+    for k in 1..gamma {
+        // b_c ← b_c - A_c x_c: the residual of the sum so far (b_c holds the previous
+        // residual and x_c the last correction); the sum is kept in y
         let c = &mut rest[0];
         let (x, b) = (&c.x, &c.b);
         c.sym
             .mul_then(x, &mut c.w, &mut c.partial, |i, ax| (b[i] - ax, [0.0; 2]));
         std::mem::swap(&mut c.b, &mut c.w);
-        std::mem::swap(&mut c.x, &mut c.y);
+        if k == 1 {
+            std::mem::swap(&mut c.x, &mut c.y);
+        } else {
+            add_to(&mut c.y, &c.x);
+        }
         cycle(rest, coarse, params);
+    }
+    if gamma > 1 {
         let c = &mut rest[0];
-        let y = &c.y;
-        c.x.par_iter_mut()
-            .zip(y.par_iter())
-            .with_min_len(min_len(y.len()))
-            .for_each(|(x, y)| *x += *y);
+        add_to(&mut c.x, &c.y);
     }
     // x += P x_c
     let xc = &rest[0].x;
@@ -111,6 +119,14 @@ fn cycle(levels: &mut [Level], coarse: &CoarseSolver, params: &AmgParams) {
         });
     lvl.transfer = Some(t);
     smooth_more(lvl, sweeps);
+}
+
+/// `x += y`.
+fn add_to(x: &mut [Vec3], y: &[Vec3]) {
+    x.par_iter_mut()
+        .zip(y.par_iter())
+        .with_min_len(min_len(y.len()))
+        .for_each(|(x, y)| *x += *y);
 }
 
 /// `sweeps` damped block-Jacobi sweeps from `x = 0`.

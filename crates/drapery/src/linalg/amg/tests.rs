@@ -78,6 +78,7 @@ fn the_v_cycle_is_symmetric_and_positive_definite() {
 #[test]
 fn the_w_cycle_is_symmetric_and_positive_definite() {
     cycle_is_symmetric_and_positive_definite(2);
+    cycle_is_symmetric_and_positive_definite(3);
 }
 
 /// On a 32² cloth with pins and plane contacts, with `coarse_cycles` visits of every coarse
