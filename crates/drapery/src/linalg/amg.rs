@@ -13,14 +13,16 @@
 //! * **Prolongator.** The tentative prolongator has one 3×3 identity block per (particle,
 //!   aggregate): the three translations are the near-null space. It is smoothed by one damped
 //!   Jacobi step on the filtered matrix `A^F` (weak blocks dropped and lumped into the diagonal,
-//!   so translations are kept): `P = (I - ω D_F⁻¹ A^F) P_tent`, `ω = 1.8 / ρ̄` with `ρ̄` a
-//!   Gershgorin bound of `ρ(D_F⁻¹ A^F)`
-//!   (weights: [`AmgParams`]).
-//! * **Coarse operators.** Galerkin, `A_c = Pᵀ A P`, recursively until at most
-//!   [`AmgParams::coarse_size`] particles remain; the coarsest is solved by dense Cholesky.
-//! * **Cycle** ([`cycle`]). A W-cycle (or V-cycle) with the same number of damped block-Jacobi
-//!   sweeps before and after the coarse correction, so it is a symmetric positive definite operator and CG
-//!   stays valid.
+//!   so translations are kept): `P = (I - ω D_F⁻¹ A^F) P_tent`,
+//!   `ω = `[`AmgParams::prolongator_weight`]` / ρ̄` with `ρ̄` a Gershgorin bound of
+//!   `ρ(D_F⁻¹ A^F)`.
+//! * **Coarse operators.** Galerkin, `A_c = Pᵀ A P` (its upper triangle, the lower one by
+//!   transposition), recursively until at most [`AmgParams::coarse_size`] particles remain; the
+//!   coarsest is solved by dense Cholesky. Every level also keeps its matrix's upper triangle
+//!   ([`SymBlockMatrix`]) for the cycle's products.
+//! * **Cycle** ([`cycle`]). A W-cycle on large levels and a V-cycle below, with the same number
+//!   of damped block-Jacobi sweeps before and after the coarse correction, so it is a symmetric
+//!   positive definite operator and CG stays valid.
 //!
 //! The structure (aggregates, patterns of `P`, `A P` and `A_c`, and the position of every
 //! product term) is built once per matrix pattern. With the default strength threshold 0 it
@@ -28,8 +30,8 @@
 //! run resumed from a saved state rebuilds exactly the hierarchy the uninterrupted run had and
 //! ends with the same bits; every call to
 //! [`Multigrid::refresh`] then only recomputes values ([`numeric`]). All loops are row-parallel
-//! with a fixed order within a row, and the only reduction is a maximum, so the result is the
-//! same bits on any number of threads.
+//! with a fixed order within a row, and the reductions are maxima or sums over chunks fixed by
+//! the size, added in order, so the result is the same bits on any number of threads.
 
 mod cycle;
 mod numeric;

@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 /// Upper triangle (diagonal included) of a symmetric block matrix, with the lists that make
 /// its product row-parallel.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct SymBlockMatrix {
     /// Row `i` is `row_ptr[i]..row_ptr[i + 1]`; its first block is the diagonal.
     row_ptr: Vec<u32>,

@@ -73,7 +73,8 @@ fn sym_inverse(d: &Mat3) -> Mat3 {
     0.5 * (inv + inv.transpose())
 }
 
-/// Block-Jacobi smoother of a level: `D⁻¹` and `ω = weight / ρ̄`.
+/// Block-Jacobi smoother of a level: `D⁻¹` and `ω = weight / ρ̄`; first the level's
+/// upper-triangle copy of its matrix, which the estimate (and then the cycle) multiplies by.
 ///
 /// `ρ̄` estimates `ρ(D⁻¹A)`: the Rayleigh quotient after a few power steps (a lower bound
 /// that converges fast; [`AmgParams::power_steps`]). Only when that fails (a matrix that is

@@ -44,16 +44,28 @@ fn mixed_filter(n: usize, side: usize) -> Vec<Mat3> {
     s
 }
 
+/// The hierarchy of a hanging `side²` cloth's matrix after `steps` steps under
+/// [`mixed_filter`], with parameters changed by `set`; returns the matrix and filter too.
+fn hierarchy(
+    side: usize,
+    steps: usize,
+    set: impl FnOnce(&mut AmgParams),
+) -> (BlockMatrix, Vec<Mat3>, Multigrid) {
+    let a = cloth_matrix(side, steps);
+    let s = mixed_filter(a.n(), side);
+    let mut mg = Multigrid::default();
+    set(&mut mg.params);
+    mg.refresh(&a, &s);
+    (a, s, mg)
+}
+
 fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum()
 }
 
 #[test]
 fn the_hierarchy_coarsens_a_cloth_to_a_small_dense_level() {
-    let a = cloth_matrix(64, 1);
-    let s = mixed_filter(a.n(), 64);
-    let mut mg = Multigrid::default();
-    mg.refresh(&a, &s);
+    let (_, _, mg) = hierarchy(64, 1, |_| {});
     let sizes = mg.level_sizes();
     assert!(sizes.len() >= 3, "{sizes:?}");
     assert!(*sizes.last().unwrap() <= mg.params.coarse_size, "{sizes:?}");
@@ -84,13 +96,11 @@ fn the_w_cycle_is_symmetric_and_positive_definite() {
 /// On a 32² cloth with pins and plane contacts, with `coarse_cycles` visits of every coarse
 /// level but the coarsest: `wᵀ B u = uᵀ B w` and `uᵀ B u > 0` for random filtered `u`, `w`.
 fn cycle_is_symmetric_and_positive_definite(coarse_cycles: usize) {
-    let a = cloth_matrix(32, 3);
+    let (a, s, mut mg) = hierarchy(32, 3, |p| {
+        p.coarse_cycles = coarse_cycles;
+        p.repeat_rows = 0;
+    });
     let n = a.n();
-    let s = mixed_filter(n, 32);
-    let mut mg = Multigrid::default();
-    mg.params.coarse_cycles = coarse_cycles;
-    mg.params.repeat_rows = 0;
-    mg.refresh(&a, &s);
     assert!(mg.level_count() >= 3, "{:?}", mg.level_sizes());
     let mut rng = Rng(5);
     let filt = |v: Vec<Vec3>| -> Vec<Vec3> { v.iter().zip(&s).map(|(x, m)| *m * *x).collect() };
@@ -138,10 +148,7 @@ fn spectral_radius(l: &Level) -> f64 {
 fn the_smoother_damping_is_set_by_the_spectral_radius_on_every_level() {
     // ω = weight / ρ̄ with ρ̄ ≤ ρ (a Rayleigh quotient), and close to it: ω ρ lies between the
     // weight and 2, so the smoother damps hard and the cycle stays positive definite
-    let a = cloth_matrix(32, 3);
-    let s = mixed_filter(a.n(), 32);
-    let mut mg = Multigrid::default();
-    mg.refresh(&a, &s);
+    let (_, _, mg) = hierarchy(32, 3, |_| {});
     let weight = mg.params.smoother_weight;
     for (k, l) in mg.levels.iter().enumerate() {
         let rho = spectral_radius(l);
@@ -314,11 +321,7 @@ fn dense_p(t: &Transfer, rows: usize, cols: usize) -> Vec<Vec<f64>> {
 #[test]
 fn every_coarse_operator_is_the_galerkin_product_of_the_finer_one() {
     // a few steps in, with pins and plane contacts in the filter
-    let a = cloth_matrix(20, 4);
-    let s = mixed_filter(a.n(), 20);
-    let mut mg = Multigrid::default();
-    mg.params.strength = 0.08;
-    mg.refresh(&a, &s);
+    let (_, _, mg) = hierarchy(20, 4, |p| p.strength = 0.08);
     assert!(mg.levels.len() >= 3, "{:?}", mg.level_sizes());
     for pair in mg.levels.windows(2) {
         let (fine, coarse) = (&pair[0], &pair[1]);
