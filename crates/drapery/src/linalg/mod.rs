@@ -4,6 +4,7 @@
 //! preconditioner ([`amg`]).
 
 pub mod amg;
+pub(crate) mod block;
 pub mod bsr;
 pub mod direct;
 pub mod pcg;

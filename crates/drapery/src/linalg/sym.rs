@@ -15,6 +15,10 @@ use super::bsr::{BlockMatrix, row_chunks};
 use crate::math::{Mat3, Vec3};
 use rayon::prelude::*;
 
+#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+#[allow(unsafe_code)]
+mod avx;
+
 /// Upper triangle (diagonal included) of a symmetric block matrix, with the lists that make
 /// its product row-parallel.
 #[derive(Clone, Debug)]
@@ -22,6 +26,7 @@ pub struct SymBlockMatrix {
     /// Row `i` is `row_ptr[i]..row_ptr[i + 1]`; its first block is the diagonal.
     row_ptr: Vec<u32>,
     col: Vec<u32>,
+    /// The blocks, then one zero block of padding (see [`avx`]).
     values: Vec<Mat3>,
     /// Per row `j`, the remote terms: row `i` (in an earlier chunk) and position of `A_ij`.
     remote_ptr: Vec<u32>,
@@ -71,7 +76,7 @@ impl SymBlockMatrix {
             remote_ptr[j + 1] += remote_ptr[j];
         }
         SymBlockMatrix {
-            values: vec![Mat3::ZERO; col.len()],
+            values: vec![Mat3::ZERO; col.len() + 1],
             row_ptr,
             col,
             remote_ptr,
@@ -145,19 +150,7 @@ impl SymBlockMatrix {
     ) -> [f64; K] {
         let end = first + y.len();
         y.iter_mut().for_each(|v| *v = Vec3::ZERO);
-        for i in first..end {
-            let r = self.row_ptr[i] as usize..self.row_ptr[i + 1] as usize;
-            let xi = x[i];
-            let mut acc = y[i - first];
-            for (&j, m) in self.col[r.clone()].iter().zip(&self.values[r]) {
-                let j = j as usize;
-                acc += *m * x[j];
-                if j != i && j < end {
-                    y[j - first] += transpose_mul(m, xi);
-                }
-            }
-            y[i - first] = acc;
-        }
+        rows(&self.row_ptr, &self.col, &self.values, first, x, y);
         let mut sum = [0.0; K];
         for j in first..end {
             let mut acc = y[j - first];
@@ -172,6 +165,41 @@ impl SymBlockMatrix {
         sum
     }
 }
+
+/// Rows `first..first + y.len()` of the product, less the remote terms: `y_i += A_ij x_j` for
+/// the stored blocks of row `i` (diagonal first) and `y_j += A_ijᵀ x_i` for the rows `j` of the
+/// same range, rows in order.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+use avx::rows;
+
+/// The portable [`rows`] (and the reference the AVX one is tested against).
+#[cfg_attr(all(target_arch = "x86_64", target_feature = "avx"), allow(dead_code))]
+fn rows_scalar(
+    row_ptr: &[u32],
+    col: &[u32],
+    values: &[Mat3],
+    first: usize,
+    x: &[Vec3],
+    y: &mut [Vec3],
+) {
+    let end = first + y.len();
+    for i in first..end {
+        let r = row_ptr[i] as usize..row_ptr[i + 1] as usize;
+        let xi = x[i];
+        let mut acc = y[i - first];
+        for (&j, m) in col[r.clone()].iter().zip(&values[r]) {
+            let j = j as usize;
+            acc += *m * x[j];
+            if j != i && j < end {
+                y[j - first] += transpose_mul(m, xi);
+            }
+        }
+        y[i - first] = acc;
+    }
+}
+
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+use rows_scalar as rows;
 
 /// `mᵀ v`.
 #[inline]
@@ -249,6 +277,32 @@ mod tests {
             }
             let want: f64 = x.iter().zip(&full).map(|(a, b)| a.dot(*b)).sum();
             prop_assert!((dot - want).abs() <= 1e-11 * scale * n as f64);
+        }
+    }
+
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// The AVX rows against the scalar ones, bit for bit, on row ranges cut anywhere.
+        #[test]
+        fn avx_rows_have_the_scalar_bits(
+            n in 1usize..600, density in 0usize..6, band in 0usize..100, seed in any::<u64>(),
+            cut in 0.0..1.0f64,
+        ) {
+            let (a, x) = random(n, density * n, band, seed);
+            let mut s = SymBlockMatrix::from_pattern(&a);
+            s.set_values(&a);
+            let mid = (cut * n as f64) as usize;
+            for range in [0..mid, mid..n, 0..n] {
+                let mut got = vec![Vec3::ZERO; range.len()];
+                let mut want = got.clone();
+                avx::rows(&s.row_ptr, &s.col, &s.values, range.start, &x, &mut got);
+                rows_scalar(&s.row_ptr, &s.col, &s.values, range.start, &x, &mut want);
+                for (g, w) in got.iter().zip(&want) {
+                    prop_assert_eq!(g.to_array().map(f64::to_bits), w.to_array().map(f64::to_bits));
+                }
+            }
         }
     }
 

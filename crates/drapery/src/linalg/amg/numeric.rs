@@ -3,6 +3,7 @@
 //! coarse operators. Every loop is row-parallel with a fixed order within each row.
 
 use super::{AmgParams, Level, Multigrid, NONE, Transfer, WEAK, cycle, norm_inf, safe_inverse};
+use crate::linalg::block::{add_mul, mul};
 use crate::linalg::bsr::{BlockMatrix, row_chunks};
 use crate::linalg::sym::SymBlockMatrix;
 use crate::math::{Mat3, Vec3};
@@ -236,7 +237,7 @@ fn prolongator(a: &BlockMatrix, t: &mut Transfer, weight: f64) -> f64 {
                     let y = if k == dk {
                         Mat3::IDENTITY
                     } else {
-                        dinv * a.values[k]
+                        mul(&dinv, &a.values[k])
                     };
                     if k != dk {
                         sum += norm_inf(&y);
@@ -278,7 +279,7 @@ fn galerkin(a: &BlockMatrix, t: &mut Transfer, coarse: &mut BlockMatrix) {
                 for (&j, k) in cols.iter().zip(r) {
                     let m = a.values[k];
                     for pq in &p[p_ptr[j as usize] as usize..p_ptr[j as usize + 1] as usize] {
-                        vals[t_pos[pos] as usize - base] += m * *pq;
+                        add_mul(&mut vals[t_pos[pos] as usize - base], &m, pq);
                         pos += 1;
                     }
                 }
@@ -308,7 +309,7 @@ fn galerkin(a: &BlockMatrix, t: &mut Transfer, coarse: &mut BlockMatrix) {
                     let i = pt_row[e] as usize;
                     let first = (t_ptr[i] + pt_skip[e]) as usize;
                     for m in &tv[first..t_ptr[i + 1] as usize] {
-                        vals[c_pos[pos] as usize - base] += pt[e] * *m;
+                        add_mul(&mut vals[c_pos[pos] as usize - base], &pt[e], m);
                         pos += 1;
                     }
                 }

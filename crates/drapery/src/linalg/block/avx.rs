@@ -1,0 +1,63 @@
+//! AVX forms of the block kernels: a 3×3 block's columns are 4-lane vectors (the fourth lane
+//! reads past the column and is discarded or overwritten), a product's column is three
+//! broadcasts, multiplies and adds in glam's order.
+
+use crate::math::{Mat3, Vec3};
+use std::arch::x86_64::*;
+
+/// `(x, y, z, 0)`.
+#[inline(always)]
+pub(crate) fn load3(v: &Vec3) -> __m256d {
+    let p = v as *const Vec3 as *const f64;
+    // SAFETY: both loads are within `v` (three `f64`, `#[repr(C)]`); the build has AVX (the
+    // module is compiled only then).
+    unsafe {
+        let lo = _mm_loadu_pd(p);
+        let hi = _mm_load_sd(p.add(2));
+        _mm256_insertf128_pd(_mm256_castpd128_pd256(lo), hi, 1)
+    }
+}
+
+/// Writes the first three lanes of `a` to `v`.
+#[inline(always)]
+pub(crate) fn store3(v: &mut Vec3, a: __m256d) {
+    let p = v as *mut Vec3 as *mut f64;
+    // SAFETY: both stores are within `v`.
+    unsafe {
+        _mm_storeu_pd(p, _mm256_castpd256_pd128(a));
+        _mm_store_sd(p.add(2), _mm256_extractf128_pd(a, 1));
+    }
+}
+
+/// `acc += a b`.
+#[inline(always)]
+pub(crate) fn add_mul(acc: &mut Mat3, a: &Mat3, b: &Mat3) {
+    let pa = a as *const Mat3 as *const f64;
+    let pc = acc as *mut Mat3 as *mut f64;
+    // SAFETY: the 4-lane loads at 0 and 3 end at 4 and 7, within the nine `f64` of a `Mat3`
+    // (`#[repr(C)]`, three columns); the third column goes through `load3`/`store3`. The
+    // 4-lane store of column 0 writes a wrong lane 3 (column 1's first entry), which the store
+    // of column 1, loaded before, then overwrites.
+    unsafe {
+        let (c0, c1, c2) = (
+            _mm256_loadu_pd(pa),
+            _mm256_loadu_pd(pa.add(3)),
+            load3(&a.z_axis),
+        );
+        let column = |b: &Vec3| {
+            let x = _mm256_mul_pd(c0, _mm256_set1_pd(b.x));
+            let y = _mm256_mul_pd(c1, _mm256_set1_pd(b.y));
+            let z = _mm256_mul_pd(c2, _mm256_set1_pd(b.z));
+            _mm256_add_pd(_mm256_add_pd(x, y), z)
+        };
+        let (r0, r1, r2) = (column(&b.x_axis), column(&b.y_axis), column(&b.z_axis));
+        let (a0, a1, a2) = (
+            _mm256_loadu_pd(pc),
+            _mm256_loadu_pd(pc.add(3)),
+            load3(&acc.z_axis),
+        );
+        _mm256_storeu_pd(pc, _mm256_add_pd(a0, r0));
+        _mm256_storeu_pd(pc.add(3), _mm256_add_pd(a1, r1));
+        store3(&mut acc.z_axis, _mm256_add_pd(a2, r2));
+    }
+}
