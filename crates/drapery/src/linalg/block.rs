@@ -1,8 +1,9 @@
-//! 3×3 block products of the multigrid's set-up (`A P`, `Pᵀ (A P)`, `D⁻¹ A`), with AVX when
-//! the build targets a CPU that has it (see `.cargo/config.toml`), and glam's scalar code
-//! otherwise. Both add in the same order, so they give the same bits.
+//! 3×3 block products of the multigrid (`A P`, `Pᵀ (A P)`, `D⁻¹ A` in the set-up, the
+//! restriction and the prolongation in the cycle), with AVX when the build targets a CPU that
+//! has it (see `.cargo/config.toml`), and glam's scalar code otherwise. Both add in the same
+//! order, so they give the same bits.
 
-use crate::math::Mat3;
+use crate::math::{Mat3, Vec3};
 
 #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
 #[allow(unsafe_code)]
@@ -27,6 +28,18 @@ pub(crate) fn mul(a: &Mat3, b: &Mat3) -> Mat3 {
     out
 }
 
+/// `acc + Σ_k blocks[k] x[cols[k]]`, added term by term in order.
+#[inline]
+pub(crate) fn add_products(acc: Vec3, blocks: &[Mat3], cols: &[u32], x: &[Vec3]) -> Vec3 {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    return avx::add_products(acc, blocks, cols, x);
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+    blocks
+        .iter()
+        .zip(cols)
+        .fold(acc, |a, (m, &j)| a + *m * x[j as usize])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -49,6 +62,26 @@ mod tests {
             add_mul(&mut got, &a, &b);
             prop_assert_eq!(bits(&got), bits(&(acc + a * b)));
             prop_assert_eq!(bits(&mul(&a, &b)), bits(&(a * b)));
+        }
+
+        #[test]
+        fn sums_of_products_have_the_scalar_bits(
+            blocks in prop::collection::vec(mat(), 0..12),
+            x in prop::collection::vec(prop::array::uniform3(-1e3..1e3f64), 1..8),
+            seed in any::<u32>(),
+            acc in prop::array::uniform3(-1e3..1e3f64),
+        ) {
+            let x: Vec<Vec3> = x.into_iter().map(Vec3::from_array).collect();
+            let cols: Vec<u32> = (0..blocks.len() as u32)
+                .map(|k| (k.wrapping_mul(2_654_435_761) ^ seed) % x.len() as u32)
+                .collect();
+            let acc = Vec3::from_array(acc);
+            let want = blocks
+                .iter()
+                .zip(&cols)
+                .fold(acc, |a, (m, &j)| a + *m * x[j as usize]);
+            let got = add_products(acc, &blocks, &cols, &x);
+            prop_assert_eq!(got.to_array().map(f64::to_bits), want.to_array().map(f64::to_bits));
         }
     }
 }

@@ -12,6 +12,7 @@
 //! definite operator `B` give the symmetric positive definite `I - (I - B A)^γ` times `A⁻¹`.
 
 use super::{AmgParams, CoarseSolver, Level, Multigrid};
+use crate::linalg::block::add_products;
 use crate::linalg::vector::chunked_sum;
 use crate::math::{Mat3, Vec3};
 use rayon::prelude::*;
@@ -72,11 +73,8 @@ fn cycle(levels: &mut [Level], coarse: &CoarseSolver, params: &AmgParams) {
         .enumerate()
         .with_min_len(rows / 4)
         .for_each(|(c, bc)| {
-            let mut acc = Vec3::ZERO;
-            for e in t.pt_ptr[c] as usize..t.pt_ptr[c + 1] as usize {
-                acc += t.pt[e] * w[t.pt_row[e] as usize];
-            }
-            *bc = acc;
+            let e = t.pt_ptr[c] as usize..t.pt_ptr[c + 1] as usize;
+            *bc = add_products(Vec3::ZERO, &t.pt[e.clone()], &t.pt_row[e], w);
         });
     cycle(rest, coarse, params);
     // more cycles from the residual each leaves (the coarsest level's solve is exact)
@@ -113,9 +111,7 @@ fn cycle(levels: &mut [Level], coarse: &CoarseSolver, params: &AmgParams) {
         .with_min_len(rows)
         .for_each(|(i, xi)| {
             let r = t.p_ptr[i] as usize..t.p_ptr[i + 1] as usize;
-            for (c, m) in t.p_col[r.clone()].iter().zip(&t.p[r]) {
-                *xi += *m * xc[*c as usize];
-            }
+            *xi = add_products(*xi, &t.p[r.clone()], &t.p_col[r], xc);
         });
     lvl.transfer = Some(t);
     smooth_more(lvl, sweeps);

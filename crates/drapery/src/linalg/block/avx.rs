@@ -61,3 +61,24 @@ pub(crate) fn add_mul(acc: &mut Mat3, a: &Mat3, b: &Mat3) {
         store3(&mut acc.z_axis, _mm256_add_pd(a2, r2));
     }
 }
+
+/// `acc + Σ_k blocks[k] x[cols[k]]`, in order.
+#[inline(always)]
+pub(crate) fn add_products(acc: Vec3, blocks: &[Mat3], cols: &[u32], x: &[Vec3]) -> Vec3 {
+    let mut a = load3(&acc);
+    for (m, &j) in blocks.iter().zip(cols) {
+        let p = m as *const Mat3 as *const f64;
+        let v = &x[j as usize];
+        // SAFETY: the 4-lane loads at 0 and 3 end within the `Mat3`; the third column goes
+        // through `load3`.
+        unsafe {
+            let x = _mm256_mul_pd(_mm256_loadu_pd(p), _mm256_set1_pd(v.x));
+            let y = _mm256_mul_pd(_mm256_loadu_pd(p.add(3)), _mm256_set1_pd(v.y));
+            let z = _mm256_mul_pd(load3(&m.z_axis), _mm256_set1_pd(v.z));
+            a = _mm256_add_pd(a, _mm256_add_pd(_mm256_add_pd(x, y), z));
+        }
+    }
+    let mut out = Vec3::ZERO;
+    store3(&mut out, a);
+    out
+}
