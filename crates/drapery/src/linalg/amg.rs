@@ -117,25 +117,54 @@ struct Transfer {
     pt_row: Vec<u32>,
     pt_src: Vec<u32>,
     pt: Vec<Mat3>,
-    /// Per entry of `Pᵀ` (coarse row `I`, fine row `i`), how many leading blocks of `T`'s row
-    /// `i` have a column below `I`: the Galerkin product computes the upper triangle only.
-    pt_skip: Vec<u32>,
     /// Per block of the fine matrix: position in `p` of the slot that block `(i, j)` of `A^F`
     /// feeds (the column `agg(j)` of row `i`), or [`WEAK`].
     a_slot: Vec<u32>,
-    /// `T = A P` in block CSR (fine rows, coarse columns) and, per fine row, the start in
-    /// `t_pos` of the target positions of its products `A_ik P_kJ`, in loop order.
+    /// `T = A P` in block CSR (fine rows, coarse columns); per block of `T`, its products
+    /// `A_ik P_kJ` as positions in `A`'s and `P`'s values, in increasing `k`.
     t_ptr: Vec<u32>,
     t: Vec<Mat3>,
-    t_pos_ptr: Vec<u32>,
-    t_pos: Vec<u32>,
-    /// Per coarse row, the start in `c_pos` of the target positions (in the coarse matrix's
-    /// values) of its products `P_iIᵀ T_iJ` with `J ≥ I`, in loop order.
-    c_pos_ptr: Vec<u32>,
-    c_pos: Vec<u32>,
+    t_terms: Terms,
+    /// Per block of the coarse matrix's upper triangle (`J ≥ I`), its products `P_iIᵀ T_iJ` as
+    /// positions in `pt` and `t`, in increasing `i` (none for the lower triangle).
+    c_terms: Terms,
     /// Each block of the coarse matrix's lower triangle and the position of its transpose
     /// (itself for a diagonal block, which is symmetrized), set after the upper triangle.
     c_lower: Vec<[u32; 2]>,
+}
+
+/// The products that make up each block of a matrix product, block by block: block `o` is
+/// `Σ left[l] right[r]` over `[l, r]` in `list[ptr[o]..ptr[o + 1]]`, added in that order.
+#[derive(Clone, Debug, Default)]
+struct Terms {
+    ptr: Vec<u32>,
+    list: Vec<[u32; 2]>,
+}
+
+impl Terms {
+    /// From the products in loop order and the block each adds to (a stable counting sort,
+    /// so each block keeps its products in loop order).
+    fn by_block(blocks: usize, target: &[u32], terms: &[[u32; 2]]) -> Self {
+        let mut ptr = vec![0u32; blocks + 1];
+        for &o in target {
+            ptr[o as usize + 1] += 1;
+        }
+        for o in 0..blocks {
+            ptr[o + 1] += ptr[o];
+        }
+        let mut fill = ptr[..blocks].to_vec();
+        let mut list = vec![[0u32; 2]; terms.len()];
+        for (&o, &t) in target.iter().zip(terms) {
+            list[fill[o as usize] as usize] = t;
+            fill[o as usize] += 1;
+        }
+        Terms { ptr, list }
+    }
+
+    /// The products of block `o`.
+    fn of(&self, o: usize) -> &[[u32; 2]] {
+        &self.list[self.ptr[o] as usize..self.ptr[o + 1] as usize]
+    }
 }
 
 /// Marks a weak block in [`Transfer::a_slot`].

@@ -28,6 +28,17 @@ pub(crate) fn mul(a: &Mat3, b: &Mat3) -> Mat3 {
     out
 }
 
+/// `Σ left[l] right[r]` over `[l, r]` in `terms`, added in that order from zero.
+#[inline]
+pub(crate) fn sum_products(left: &[Mat3], right: &[Mat3], terms: &[[u32; 2]]) -> Mat3 {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    return avx::sum_products(left, right, terms);
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+    terms.iter().fold(Mat3::ZERO, |acc, &[l, r]| {
+        acc + left[l as usize] * right[r as usize]
+    })
+}
+
 /// `acc + Σ_k blocks[k] x[cols[k]]`, added term by term in order.
 #[inline]
 pub(crate) fn add_products(acc: Vec3, blocks: &[Mat3], cols: &[u32], x: &[Vec3]) -> Vec3 {
@@ -62,6 +73,22 @@ mod tests {
             add_mul(&mut got, &a, &b);
             prop_assert_eq!(bits(&got), bits(&(acc + a * b)));
             prop_assert_eq!(bits(&mul(&a, &b)), bits(&(a * b)));
+        }
+
+        #[test]
+        fn sums_of_block_products_have_the_scalar_bits(
+            left in prop::collection::vec(mat(), 1..6),
+            right in prop::collection::vec(mat(), 1..6),
+            terms in prop::collection::vec((0u32..6, 0u32..6), 0..10),
+        ) {
+            let terms: Vec<[u32; 2]> = terms
+                .into_iter()
+                .map(|(l, r)| [l % left.len() as u32, r % right.len() as u32])
+                .collect();
+            let want = terms
+                .iter()
+                .fold(Mat3::ZERO, |acc, &[l, r]| acc + left[l as usize] * right[r as usize]);
+            prop_assert_eq!(bits(&sum_products(&left, &right, &terms)), bits(&want));
         }
 
         #[test]

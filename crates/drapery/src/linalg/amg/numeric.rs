@@ -3,7 +3,7 @@
 //! coarse operators. Every loop is row-parallel with a fixed order within each row.
 
 use super::{AmgParams, Level, Multigrid, NONE, Transfer, WEAK, cycle, norm_inf, safe_inverse};
-use crate::linalg::block::{add_mul, mul};
+use crate::linalg::block::{mul, sum_products};
 use crate::linalg::bsr::{BlockMatrix, row_chunks};
 use crate::linalg::sym::SymBlockMatrix;
 use crate::math::{Mat3, Vec3};
@@ -256,67 +256,28 @@ fn prolongator(a: &BlockMatrix, t: &mut Transfer, weight: f64) -> f64 {
     }
 }
 
-/// `T = A P`, then `coarse = Pᵀ T` over the precomputed positions: the upper triangle, and
-/// the lower one as its transpose (`Pᵀ A P` is symmetric).
+/// `T = A P`, then `coarse = Pᵀ T` from the precomputed products of each block (one sum per
+/// block, kept in registers): the upper triangle, and the lower one as its transpose (`Pᵀ A P`
+/// is symmetric).
 fn galerkin(a: &BlockMatrix, t: &mut Transfer, coarse: &mut BlockMatrix) {
     let Transfer {
-        p_ptr,
-        p,
-        t_ptr,
-        t: tv,
-        t_pos_ptr,
-        t_pos,
-        ..
+        p, t: tv, t_terms, ..
     } = t;
-    row_chunks(tv, t_ptr, ROWS)
-        .into_par_iter()
-        .for_each(|(rows, vals)| {
-            let base = t_ptr[rows.start] as usize;
-            vals.iter_mut().for_each(|m| *m = Mat3::ZERO);
-            for i in rows {
-                let mut pos = t_pos_ptr[i] as usize;
-                let (cols, r) = a.row(i);
-                for (&j, k) in cols.iter().zip(r) {
-                    let m = a.values[k];
-                    for pq in &p[p_ptr[j as usize] as usize..p_ptr[j as usize + 1] as usize] {
-                        add_mul(&mut vals[t_pos[pos] as usize - base], &m, pq);
-                        pos += 1;
-                    }
-                }
-            }
-        });
-    let ptr = coarse.row_ptr().to_vec();
+    tv.par_iter_mut()
+        .enumerate()
+        .with_min_len(8 * ROWS)
+        .for_each(|(o, m)| *m = sum_products(&a.values, p, t_terms.of(o)));
     let Transfer {
-        pt_ptr,
-        pt_row,
-        pt,
-        pt_skip,
-        t_ptr,
-        t: tv,
-        c_pos_ptr,
-        c_pos,
-        c_lower,
-        ..
+        pt, t: tv, c_terms, ..
     } = t;
-    row_chunks(&mut coarse.values, &ptr, ROWS / 4)
-        .into_par_iter()
-        .for_each(|(rows, vals)| {
-            let base = ptr[rows.start] as usize;
-            vals.iter_mut().for_each(|m| *m = Mat3::ZERO);
-            for c in rows {
-                let mut pos = c_pos_ptr[c] as usize;
-                for e in pt_ptr[c] as usize..pt_ptr[c + 1] as usize {
-                    let i = pt_row[e] as usize;
-                    let first = (t_ptr[i] + pt_skip[e]) as usize;
-                    for m in &tv[first..t_ptr[i + 1] as usize] {
-                        add_mul(&mut vals[c_pos[pos] as usize - base], &pt[e], m);
-                        pos += 1;
-                    }
-                }
-            }
-        });
+    coarse
+        .values
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(4 * ROWS)
+        .for_each(|(o, m)| *m = sum_products(pt, tv, c_terms.of(o)));
     // the lower triangle is the transpose of the upper one; diagonal blocks are symmetrized
-    for &[k, kt] in c_lower.iter() {
+    for &[k, kt] in &t.c_lower {
         let (k, kt) = (k as usize, kt as usize);
         let m = coarse.values[kt].transpose();
         coarse.values[k] = if k == kt {

@@ -2,7 +2,7 @@
 //! patterns (with product positions) of `P`, `Pᵀ`, `T = A P` and `A_c = Pᵀ T`.
 //! Sequential; it runs once per matrix pattern.
 
-use super::{NONE, Transfer, WEAK};
+use super::{NONE, Terms, Transfer, WEAK};
 use crate::linalg::bsr::BlockMatrix;
 use crate::math::Mat3;
 
@@ -173,10 +173,10 @@ pub(super) fn transfer(a: &BlockMatrix, theta: f64) -> Option<(Transfer, BlockMa
     // T = A P: row i gathers the P rows of its columns.
     let mut mark = vec![NONE; nc];
     t.t_ptr.push(0);
-    t.t_pos_ptr.push(0);
     let mut t_col: Vec<u32> = Vec::new();
+    let (mut target, mut terms) = (Vec::new(), Vec::new());
     for i in 0..n {
-        let (cols, _) = a.row(i);
+        let (cols, r) = a.row(i);
         row.clear();
         for &j in cols {
             let j = j as usize;
@@ -188,17 +188,18 @@ pub(super) fn transfer(a: &BlockMatrix, theta: f64) -> Option<(Transfer, BlockMa
         for (p, &c) in row.iter().enumerate() {
             mark[c as usize] = base + p as u32;
         }
-        for &j in cols {
+        for (&j, k) in cols.iter().zip(r) {
             let j = j as usize;
             for q in t.p_ptr[j]..t.p_ptr[j + 1] {
-                t.t_pos.push(mark[t.p_col[q as usize] as usize]);
+                target.push(mark[t.p_col[q as usize] as usize]);
+                terms.push([k as u32, q]);
             }
         }
         t_col.extend_from_slice(&row);
         t.t_ptr.push(t_col.len() as u32);
-        t.t_pos_ptr.push(t.t_pos.len() as u32);
     }
     t.t = vec![Mat3::ZERO; t_col.len()];
+    t.t_terms = Terms::by_block(t.t.len(), &target, &terms);
     // A_c = Pᵀ T: coarse row I gathers the T rows of the fine rows in column I of P.
     let mut pairs = Vec::new();
     for c in 0..nc {
@@ -214,22 +215,24 @@ pub(super) fn transfer(a: &BlockMatrix, theta: f64) -> Option<(Transfer, BlockMa
     pairs.sort_unstable();
     pairs.dedup();
     let coarse = BlockMatrix::from_pairs(nc, &pairs);
-    t.c_pos_ptr.push(0);
     t.pt = vec![Mat3::ZERO; t.pt_row.len()];
-    t.pt_skip = vec![0; t.pt_row.len()];
+    // only the upper triangle's products (J ≥ I)
+    let (mut target, mut terms) = (Vec::new(), Vec::new());
     for c in 0..nc {
         for e in t.pt_ptr[c] as usize..t.pt_ptr[c + 1] as usize {
             let i = t.pt_row[e] as usize;
-            let cols = &t_col[t.t_ptr[i] as usize..t.t_ptr[i + 1] as usize];
-            let skip = cols.partition_point(|&j| (j as usize) < c);
-            t.pt_skip[e] = skip as u32;
-            for &j in &cols[skip..] {
+            let row = t.t_ptr[i] as usize..t.t_ptr[i + 1] as usize;
+            for (&j, tk) in t_col[row.clone()].iter().zip(row) {
+                if (j as usize) < c {
+                    continue;
+                }
                 let k = coarse.find(c, j as usize).expect("coarse pattern");
-                t.c_pos.push(k as u32);
+                target.push(k as u32);
+                terms.push([e as u32, tk as u32]);
             }
         }
-        t.c_pos_ptr.push(t.c_pos.len() as u32);
     }
+    t.c_terms = Terms::by_block(coarse.nnz_blocks(), &target, &terms);
     for c in 0..nc {
         let (cols, r) = coarse.row(c);
         for (&j, k) in cols.iter().zip(r) {

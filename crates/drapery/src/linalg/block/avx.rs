@@ -82,3 +82,35 @@ pub(crate) fn add_products(acc: Vec3, blocks: &[Mat3], cols: &[u32], x: &[Vec3])
     store3(&mut out, a);
     out
 }
+
+/// `Σ left[l] right[r]` over `[l, r]` in `terms`, in order from zero.
+#[inline(always)]
+pub(crate) fn sum_products(left: &[Mat3], right: &[Mat3], terms: &[[u32; 2]]) -> Mat3 {
+    // SAFETY: as in `add_mul`: 4-lane loads and stores at 0 and 3 of a `Mat3`, `load3` and
+    // `store3` for its third column; the stores go in column order, so each one's fourth lane
+    // is overwritten by the next.
+    unsafe {
+        let zero = _mm256_setzero_pd();
+        let mut acc = [zero; 3];
+        for &[l, r] in terms {
+            let a = &left[l as usize];
+            let pa = a as *const Mat3 as *const f64;
+            let c0 = _mm256_loadu_pd(pa);
+            let c1 = _mm256_loadu_pd(pa.add(3));
+            let c2 = load3(&a.z_axis);
+            let b = &right[r as usize];
+            for (acc, col) in acc.iter_mut().zip([&b.x_axis, &b.y_axis, &b.z_axis]) {
+                let x = _mm256_mul_pd(c0, _mm256_set1_pd(col.x));
+                let y = _mm256_mul_pd(c1, _mm256_set1_pd(col.y));
+                let z = _mm256_mul_pd(c2, _mm256_set1_pd(col.z));
+                *acc = _mm256_add_pd(*acc, _mm256_add_pd(_mm256_add_pd(x, y), z));
+            }
+        }
+        let mut out = Mat3::ZERO;
+        let po = &mut out as *mut Mat3 as *mut f64;
+        _mm256_storeu_pd(po, acc[0]);
+        _mm256_storeu_pd(po.add(3), acc[1]);
+        store3(&mut out.z_axis, acc[2]);
+        out
+    }
+}
