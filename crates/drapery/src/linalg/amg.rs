@@ -329,12 +329,16 @@ impl Multigrid {
     fn build(&mut self, a: &BlockMatrix, s: &[Mat3]) {
         self.levels.clear();
         let mut fine = Level::new(a.clone());
-        numeric::filter_matrix(a, s, &mut fine.a);
+        numeric::filter_matrix(a, s, &mut fine.a, &mut fine.sym);
         self.levels.push(fine);
         loop {
             let l = self.levels.len() - 1;
             let n = self.levels[l].a.n();
-            numeric::smoother(&mut self.levels[l], &self.params);
+            let lvl = &mut self.levels[l];
+            if l > 0 {
+                lvl.sym.set_values(&lvl.a);
+            }
+            numeric::smoother(lvl, &self.params);
             if n <= self.params.coarse_size || l + 1 >= self.params.max_levels {
                 break;
             }

@@ -111,6 +111,13 @@ impl SymBlockMatrix {
         });
     }
 
+    /// The stored blocks cut into runs of `rows` rows (each row's blocks from its diagonal
+    /// on), with their row ranges: for writing the values in parallel, as
+    /// [`SymBlockMatrix::set_values`] does.
+    pub fn row_chunks_mut(&mut self, rows: usize) -> Vec<(std::ops::Range<usize>, &mut [Mat3])> {
+        row_chunks(&mut self.values, &self.row_ptr, rows)
+    }
+
     /// The diagonal block of row `i`.
     pub fn diag(&self, i: usize) -> &Mat3 {
         &self.values[self.row_ptr[i] as usize]

@@ -14,11 +14,15 @@ const ROWS: usize = 128;
 
 /// Recomputes every value for a new matrix of the same pattern.
 pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3]) {
-    filter_matrix(a, s, &mut mg.levels[0].a);
+    let fine = &mut mg.levels[0];
+    filter_matrix(a, s, &mut fine.a, &mut fine.sym);
     let params = mg.params;
     for l in 0..mg.levels.len() {
         let (head, tail) = mg.levels.split_at_mut(l + 1);
         let lvl = &mut head[l];
+        if l > 0 {
+            lvl.sym.set_values(&lvl.a);
+        }
         smoother(lvl, &params);
         if let Some(next) = tail.first_mut() {
             transfer(lvl, &mut next.a, params.prolongator_weight);
@@ -27,8 +31,14 @@ pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3]) {
     cycle::factor_coarsest(mg);
 }
 
-/// `out = S A S + (I - S)` block by block (`out` has the pattern of `a`).
-pub(super) fn filter_matrix(a: &BlockMatrix, s: &[Mat3], out: &mut BlockMatrix) {
+/// `out = S A S + (I - S)` block by block (`out` has the pattern of `a`), and its upper
+/// triangle into `upper` in the same pass.
+pub(super) fn filter_matrix(
+    a: &BlockMatrix,
+    s: &[Mat3],
+    out: &mut BlockMatrix,
+    upper: &mut SymBlockMatrix,
+) {
     // 0: identity, 1: zero, 2: general
     let kind: Vec<u8> = s
         .par_iter()
@@ -46,8 +56,10 @@ pub(super) fn filter_matrix(a: &BlockMatrix, s: &[Mat3], out: &mut BlockMatrix) 
     let ptr = out.row_ptr().to_vec();
     row_chunks(&mut out.values, &ptr, ROWS)
         .into_par_iter()
-        .for_each(|(rows, vals)| {
+        .zip(upper.row_chunks_mut(ROWS))
+        .for_each(|((rows, vals), (_, up))| {
             let base = ptr[rows.start] as usize;
+            let mut at = 0;
             for i in rows {
                 let (cols, r) = a.row(i);
                 for (&j, k) in cols.iter().zip(r) {
@@ -62,6 +74,10 @@ pub(super) fn filter_matrix(a: &BlockMatrix, s: &[Mat3], out: &mut BlockMatrix) 
                         f += Mat3::IDENTITY - s[i];
                     }
                     vals[k - base] = f;
+                    if j >= i {
+                        up[at] = f;
+                        at += 1;
+                    }
                 }
             }
         });
@@ -74,8 +90,8 @@ fn sym_inverse(d: &Mat3) -> Mat3 {
     0.5 * (inv + inv.transpose())
 }
 
-/// Block-Jacobi smoother of a level: `D⁻¹` and `ω = weight / ρ̄`; first the level's
-/// upper-triangle copy of its matrix, which the estimate (and then the cycle) multiplies by.
+/// Block-Jacobi smoother of a level: `D⁻¹` and `ω = weight / ρ̄`, with the level's
+/// upper-triangle copy of its matrix set (the estimate and the cycle multiply by it).
 ///
 /// `ρ̄` estimates `ρ(D⁻¹A)`: the Rayleigh quotient after a few power steps (a lower bound
 /// that converges fast; [`AmgParams::power_steps`]). Only when that fails (a matrix that is
@@ -85,7 +101,6 @@ fn sym_inverse(d: &Mat3) -> Mat3 {
 /// overestimates `ρ` by 1.8–1.9× on the finest level of hanging sheets, and by more on some
 /// levels of a draped one, so damping by `G` smoothed far too weakly.
 pub(super) fn smoother(lvl: &mut Level, params: &AmgParams) {
-    lvl.sym.set_values(&lvl.a);
     let a = &lvl.a;
     lvl.dinv
         .par_iter_mut()
