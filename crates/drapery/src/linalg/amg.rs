@@ -241,6 +241,8 @@ pub struct Multigrid {
     reference: Option<(BlockMatrix, Vec<Mat3>)>,
     /// Chunk sums of [`Multigrid::apply`].
     partial: Vec<f64>,
+    /// Damp the smoothers by an upper bound of `ρ` (see [`Multigrid::refresh_bounded`]).
+    bound_damping: bool,
 }
 
 impl Multigrid {
@@ -269,6 +271,16 @@ impl Multigrid {
             self.times.structure = 0.0;
             self.times.values = t0.elapsed().as_secs_f64();
         }
+    }
+
+    /// [`Multigrid::refresh`] with every smoother damped by the Gershgorin bound of
+    /// `ρ(D⁻¹A)` instead of the power estimate, which guarantees `ω ρ < 2` on every level and
+    /// so a positive definite cycle for a symmetric positive definite `a`, at the price of
+    /// weaker smoothing. For a solve whose preconditioner turned out indefinite.
+    pub fn refresh_bounded(&mut self, a: &BlockMatrix, s: &[Mat3]) {
+        self.bound_damping = true;
+        self.refresh(a, s);
+        self.bound_damping = false;
     }
 
     /// Forgets the structure: the next refresh rebuilds it from the values it is given.
@@ -338,7 +350,7 @@ impl Multigrid {
             if l > 0 {
                 lvl.sym.set_values(&lvl.a);
             }
-            numeric::smoother(lvl, &self.params);
+            numeric::smoother(lvl, &self.params, self.bound_damping);
             if n <= self.params.coarse_size || l + 1 >= self.params.max_levels {
                 break;
             }

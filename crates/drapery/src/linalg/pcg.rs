@@ -50,8 +50,12 @@ pub struct SolveStats {
     pub converged: bool,
     /// Set when `cᵀ A c ≤ 0` was met: the filtered matrix is not positive definite.
     pub indefinite: bool,
-    /// Set when `rᵀ P⁻¹ r ≤ 0` was met: the preconditioner is not positive definite.
+    /// Set when `rᵀ P⁻¹ r ≤ 0` was met: the preconditioner is not positive definite (with the
+    /// multigrid, also after its smoothers were damped by a bound, see `bounded_damping`).
     pub bad_preconditioner: bool,
+    /// Set when the multigrid turned out not positive definite and the solve went on with its
+    /// smoothers damped by an upper bound of `ρ(D⁻¹A)` ([`Multigrid::refresh_bounded`]).
+    pub bounded_damping: bool,
 }
 
 /// Reusable work vectors.
@@ -180,12 +184,56 @@ pub fn solve_preconditioned_by(
     for i in 0..n {
         w.r[i] = s[i] * (b[i] - w.q[i]);
     }
-    let mut delta = precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.c);
     let target = settings.tolerance * r0;
     let mut stats = SolveStats::default();
     let mut rnorm = dot(&w.r, &w.r).sqrt();
+    for attempt in 0..2 {
+        if attempt == 1 {
+            if !(stats.bad_preconditioner && multigrid) {
+                break;
+            }
+            // The cycle was not positive definite (a power estimate of ρ(D⁻¹A) far below ρ
+            // leaves ω ρ ≥ 2): damp its smoothers by an upper bound of ρ instead, and restart
+            // the conjugate directions from the current iterate.
+            w.amg.refresh_bounded(p, s);
+            stats.bad_preconditioner = false;
+            stats.bounded_damping = true;
+        }
+        iterate(
+            a,
+            s,
+            x,
+            settings,
+            w,
+            target,
+            filtered_product,
+            &mut stats,
+            &mut rnorm,
+        );
+    }
+    stats.relative_residual = rnorm / r0;
+    stats.converged = rnorm <= target && rnorm.is_finite();
+    stats
+}
+
+/// CG iterations from `x` (with `w.r` its filtered residual) until `‖r‖ ≤ target`, the
+/// iteration cap, or a breakdown (recorded in `stats`); `rnorm` is `‖r‖`, kept up to date.
+#[allow(clippy::too_many_arguments)]
+fn iterate(
+    a: &BlockMatrix,
+    s: &[Mat3],
+    x: &mut [Vec3],
+    settings: &PcgSettings,
+    w: &mut PcgScratch,
+    target: f64,
+    filtered_product: bool,
+    stats: &mut SolveStats,
+    rnorm: &mut f64,
+) {
+    let multigrid = settings.preconditioner == Preconditioner::Multigrid;
+    let mut delta = precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.c);
     while stats.iterations < settings.max_iterations {
-        if rnorm <= target {
+        if *rnorm <= target {
             break;
         }
         // q = S A c and cᵀq in one pass
@@ -225,8 +273,8 @@ pub fn solve_preconditioned_by(
         };
         let delta_new = precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.s);
         stats.iterations += 1;
-        rnorm = rr.sqrt();
-        if !(delta_new > 0.0) && rnorm > target {
+        *rnorm = rr.sqrt();
+        if !(delta_new > 0.0) && *rnorm > target {
             // rᵀ P⁻¹ r ≤ 0 for r ≠ 0: the preconditioner is not positive definite
             stats.bad_preconditioner = true;
             break;
@@ -238,7 +286,4 @@ pub fn solve_preconditioned_by(
             .with_min_len(CHUNK)
             .for_each(|(c, si)| *c = *si + beta * *c);
     }
-    stats.relative_residual = rnorm / r0;
-    stats.converged = rnorm <= target && rnorm.is_finite();
-    stats
 }

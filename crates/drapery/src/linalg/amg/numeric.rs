@@ -17,13 +17,14 @@ pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3]) {
     let fine = &mut mg.levels[0];
     filter_matrix(a, s, &mut fine.a, &mut fine.sym);
     let params = mg.params;
+    let bound = mg.bound_damping;
     for l in 0..mg.levels.len() {
         let (head, tail) = mg.levels.split_at_mut(l + 1);
         let lvl = &mut head[l];
         if l > 0 {
             lvl.sym.set_values(&lvl.a);
         }
-        smoother(lvl, &params);
+        smoother(lvl, &params, bound);
         if let Some(next) = tail.first_mut() {
             transfer(lvl, &mut next.a, params.prolongator_weight);
         }
@@ -99,8 +100,10 @@ fn sym_inverse(d: &Mat3) -> Mat3 {
 /// `G = max_i Σ_j ‖D_i⁻¹ A_ij‖_∞ ≥ ρ` computed instead. `G` is never needed as a cap: the
 /// Rayleigh quotient of a symmetric `A` and positive definite `D` is at most `ρ`. On cloth `G`
 /// overestimates `ρ` by 1.8–1.9× on the finest level of hanging sheets, and by more on some
-/// levels of a draped one, so damping by `G` smoothed far too weakly.
-pub(super) fn smoother(lvl: &mut Level, params: &AmgParams) {
+/// levels of a draped one, so damping by `G` smoothed far too weakly. With `bound` set, `G` is
+/// used anyway: `ω ρ ≤ weight < 2` is then guaranteed, where a power estimate far below `ρ` (a
+/// few very stiff contact rows, say) can leave `ω ρ ≥ 2` and the cycle indefinite.
+pub(super) fn smoother(lvl: &mut Level, params: &AmgParams, bound: bool) {
     let a = &lvl.a;
     lvl.dinv
         .par_iter_mut()
@@ -113,13 +116,17 @@ pub(super) fn smoother(lvl: &mut Level, params: &AmgParams) {
     } else {
         params.power_steps.max(20)
     };
-    let estimate = spectral_estimate(
-        &lvl.sym,
-        &lvl.dinv,
-        steps,
-        [&mut lvl.w, &mut lvl.x],
-        &mut lvl.partial,
-    );
+    let estimate = if bound {
+        0.0
+    } else {
+        spectral_estimate(
+            &lvl.sym,
+            &lvl.dinv,
+            steps,
+            [&mut lvl.w, &mut lvl.x],
+            &mut lvl.partial,
+        )
+    };
     let rho = if estimate > 0.0 && estimate.is_finite() {
         estimate
     } else {
