@@ -1,5 +1,5 @@
-//! Kernel micro-benchmarks (divan) for regression tracking: assembly (the matrix alone, and
-//! the step's linearization), block SpMV (full and upper-triangle storage), one
+//! Kernel micro-benchmarks (divan) for regression tracking: assembly, block SpMV (full and
+//! upper-triangle storage), one
 //! multigrid V-cycle, the multigrid's value refresh, one PCG solve, the broad phase, and two memory-bandwidth references
 //! (a read-only sum and a STREAM-style triad over arrays much larger than the caches) to
 //! compare the SpMV's bytes per second with. Run with `cargo bench --bench kernels`; the
@@ -9,7 +9,6 @@ use divan::Bencher;
 use divan::counter::BytesCount;
 use drapery::Simulation;
 use drapery::collision::broad_phase::candidates;
-use drapery::forces::Linearization;
 use drapery::linalg::BlockMatrix;
 use drapery::linalg::amg::Multigrid;
 use drapery::linalg::pcg::{self, PcgScratch, PcgSettings, Preconditioner};
@@ -52,31 +51,6 @@ fn spmv_bytes(a: &BlockMatrix) -> usize {
 fn assembly(bencher: Bencher, n: usize) {
     let mut sim = hang(n);
     bencher.bench_local(|| sim.assemble_matrix(H));
-}
-
-/// What a step's assembly does with the model's forces: the force, the matrix and the
-/// Jacobian product from one evaluation ([`Force::add_linearization`]), mass and right-hand
-/// side left out.
-#[divan::bench(args = [64, 128, 256])]
-fn linearization(bencher: Bencher, n: usize) {
-    let sim = hang(n);
-    let (x, v) = (&sim.model.x, &sim.model.v);
-    let at = Linearization {
-        x,
-        v,
-        matrix: (-H * H, -H),
-        product: (H, 0.0),
-        w: v,
-    };
-    let mut m = sim.matrix().clone();
-    let (mut f, mut out) = (vec![Vec3::ZERO; x.len()], vec![Vec3::ZERO; x.len()]);
-    bencher.bench_local(|| {
-        in_pool(|| {
-            for force in sim.forces() {
-                force.add_linearization(&at, &mut f, &mut m, &mut out);
-            }
-        })
-    });
 }
 
 #[divan::bench(args = [64, 128, 256])]

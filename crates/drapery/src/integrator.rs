@@ -19,9 +19,7 @@ use crate::collision::repulsion::Penalty;
 use crate::collision::response::{self, ObstacleContact};
 use crate::error::{Error, Result};
 use crate::forces::pair_sum::PairSums;
-use crate::forces::{
-    AirDrag, DampedSprings, Force, Gravity, Linearization, Repulsions, SpringDamping, Springs,
-};
+use crate::forces::{AirDrag, Force, Gravity, Linearization, Repulsions, SpringDamping, Springs};
 use crate::linalg::BlockMatrix;
 use crate::linalg::direct::DirectSolver;
 use crate::linalg::pcg::{self, PcgScratch, PcgSettings, Preconditioner};
@@ -205,10 +203,29 @@ impl Simulation {
     /// solver scratch.
     pub fn new(model: Model, settings: SolverSettings) -> Result<Self> {
         settings.validate()?;
+        let s = &model.springs;
+        let stiff: Vec<usize> = (0..s.len()).filter(|&k| s.stiffness[k] > 0.0).collect();
+        let damped: Vec<usize> = (0..s.len()).filter(|&k| s.damping[k] > 0.0).collect();
         let mut forces: Vec<Box<dyn Force>> =
             vec![Box::new(Gravity::new(&model.mass, model.gravity))];
-        if let Some(springs) = damped_springs(&model.springs, settings.damping_x_jacobian)? {
-            forces.push(Box::new(springs));
+        if !stiff.is_empty() {
+            forces.push(Box::new(Springs {
+                i: stiff.iter().map(|&k| s.i[k]).collect(),
+                j: stiff.iter().map(|&k| s.j[k]).collect(),
+                rest: stiff.iter().map(|&k| s.rest[k]).collect(),
+                k: stiff.iter().map(|&k| s.stiffness[k]).collect(),
+                clamp_compression: true,
+                sums: PairSums::default(),
+            }));
+        }
+        if !damped.is_empty() {
+            forces.push(Box::new(SpringDamping {
+                i: damped.iter().map(|&k| s.i[k]).collect(),
+                j: damped.iter().map(|&k| s.j[k]).collect(),
+                c: damped.iter().map(|&k| s.damping[k]).collect(),
+                position_jacobian: settings.damping_x_jacobian,
+                sums: PairSums::default(),
+            }));
         }
         if model.drag.iter().any(|&c| c > 0.0) {
             forces.push(Box::new(AirDrag {
@@ -899,39 +916,6 @@ impl Simulation {
         self.model.x = x0;
         self.model.v = v0;
     }
-}
-
-/// The model's springs as one force (stiffness and damping evaluated together), leaving out
-/// those with neither; `None` when none is left. A non-positive coefficient counts as zero.
-fn damped_springs(
-    s: &crate::model::Springs,
-    position_jacobian: bool,
-) -> Result<Option<DampedSprings>> {
-    let positive: fn(f64) -> f64 = |c| if c > 0.0 { c } else { 0.0 };
-    let kept: Vec<usize> = (0..s.len())
-        .filter(|&k| s.stiffness[k] > 0.0 || s.damping[k] > 0.0)
-        .collect();
-    if kept.is_empty() {
-        return Ok(None);
-    }
-    let pick = |values: &[f64], f: fn(f64) -> f64| kept.iter().map(|&k| f(values[k])).collect();
-    let (i, j): (Vec<u32>, Vec<u32>) = kept.iter().map(|&k| (s.i[k], s.j[k])).unzip();
-    let springs = Springs {
-        i: i.clone(),
-        j: j.clone(),
-        rest: pick(&s.rest, |r| r),
-        k: pick(&s.stiffness, positive),
-        clamp_compression: true,
-        sums: PairSums::default(),
-    };
-    let damping = SpringDamping {
-        i,
-        j,
-        c: pick(&s.damping, positive),
-        position_jacobian,
-        sums: PairSums::default(),
-    };
-    DampedSprings::new(springs, damping).map(Some)
 }
 
 /// `m = M - h D - h² K` of the mass and the model's `forces` at `(x, v)` (no contacts).

@@ -7,7 +7,6 @@
 //! needs the direct solver's LU).
 
 use super::pair_sum::PairSums;
-use super::spring::MIN_LENGTH;
 use super::{Force, Linearization};
 use crate::linalg::BlockMatrix;
 use crate::math::{Mat3, Vec3, outer};
@@ -28,13 +27,13 @@ pub struct SpringDamping {
 }
 
 impl SpringDamping {
-    /// Returns `(n, ℓ, u)` for spring `s`, or `None` when the spring has no length.
-    #[inline(always)]
-    pub(crate) fn geom(&self, s: usize, x: &[Vec3], v: &[Vec3]) -> Option<(Vec3, f64, Vec3)> {
+    /// Returns `(n, ℓ, u·n)` for spring `s`, or `None` when the spring has no length.
+    #[inline]
+    fn geom(&self, s: usize, x: &[Vec3], v: &[Vec3]) -> Option<(Vec3, f64, Vec3)> {
         let (i, j) = (self.i[s] as usize, self.j[s] as usize);
         let d = x[i] - x[j];
         let l = d.length();
-        if !(l > MIN_LENGTH) {
+        if !(l > 1e-300) {
             return None;
         }
         Some((d / l, l, v[i] - v[j]))
@@ -49,8 +48,8 @@ impl SpringDamping {
 
     /// Block `(i, i)` of `a ∂f/∂x + b ∂f/∂v` for a spring of coefficient `c` with geometry
     /// `g` from [`Self::geom`] (the other blocks follow by ±).
-    #[inline(always)]
-    pub(crate) fn block_at(&self, g: Option<(Vec3, f64, Vec3)>, c: f64, a: f64, b: f64) -> Mat3 {
+    #[inline]
+    fn block_at(&self, g: Option<(Vec3, f64, Vec3)>, c: f64, a: f64, b: f64) -> Mat3 {
         let Some((n, l, u)) = g else {
             return Mat3::ZERO;
         };
@@ -68,14 +67,14 @@ impl SpringDamping {
     }
 
     /// Force on particle i of a spring of coefficient `c` with geometry `g`.
-    #[inline(always)]
-    pub(crate) fn force_at(g: Option<(Vec3, f64, Vec3)>, c: f64) -> Vec3 {
+    #[inline]
+    fn force_at(g: Option<(Vec3, f64, Vec3)>, c: f64) -> Vec3 {
         g.map_or(Vec3::ZERO, |(n, _, u)| -c * u.dot(n) * n)
     }
 
     /// Whether `a ∂f/∂x + b ∂f/∂v` can be non-zero: without the position Jacobian, `b = 0`
     /// leaves nothing (the product is then skipped: it would add only zeros).
-    pub(crate) fn has_jacobian(&self, a: f64, b: f64) -> bool {
+    fn has_jacobian(&self, a: f64, b: f64) -> bool {
         b != 0.0 || (self.position_jacobian && a != 0.0)
     }
 }

@@ -4,7 +4,6 @@
 //! 3×3 blocks. For a conservative force `f = -∇E` and `K = -∇²E`. Every force here is checked
 //! against central finite differences in its tests.
 
-pub mod damped_springs;
 pub mod damping;
 pub mod drag;
 pub mod gravity;
@@ -12,7 +11,6 @@ pub mod pair_sum;
 pub mod repulsion;
 pub mod spring;
 
-pub use damped_springs::DampedSprings;
 pub use damping::SpringDamping;
 pub use drag::AirDrag;
 pub use gravity::Gravity;

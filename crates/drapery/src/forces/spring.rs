@@ -28,9 +28,8 @@ pub struct Springs {
     pub sums: PairSums,
 }
 
-/// Below this length a spring has no direction: it exerts no force and no stiffness (nor
-/// damping, which shares the threshold).
-pub(crate) const MIN_LENGTH: f64 = 1e-300;
+/// Below this length a spring has no direction: it exerts no force and no stiffness.
+const MIN_LENGTH: f64 = 1e-300;
 
 impl Springs {
     /// Force on particle i and the Hessian block used in the matrix, for spring `s`.
@@ -41,13 +40,7 @@ impl Springs {
         if !(l > MIN_LENGTH) {
             return (Vec3::ZERO, Mat3::ZERO);
         }
-        self.eval_at(s, d / l, l)
-    }
-
-    /// [`Self::eval`] of spring `s` from its direction `n` and length `l > 0`, for forces that
-    /// share the geometry (damped springs).
-    #[inline(always)]
-    pub(crate) fn eval_at(&self, s: usize, n: Vec3, l: f64) -> (Vec3, Mat3) {
+        let n = d / l;
         let (k, rest) = (self.k[s], self.rest[s]);
         let f = -k * (l - rest) * n;
         let mut t = 1.0 - rest / l;
