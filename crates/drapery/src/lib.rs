@@ -8,7 +8,7 @@
 //! Data flows one way: scene → [`model::Model`] → [`integrator::Simulation::step`] → frames out.
 //! The library never prints and never exits: every failure is an [`Error`] value.
 #![warn(missing_docs)]
-// `unsafe` only in the AVX kernel of the upper-triangle product (`linalg::sym`), which allows it
+// `unsafe` only in the AVX block kernels (`linalg::block::avx`, `linalg::sym::avx`), which allow it
 #![deny(unsafe_code)]
 
 pub mod collision;

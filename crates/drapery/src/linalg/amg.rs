@@ -241,8 +241,6 @@ pub struct Multigrid {
     reference: Option<(BlockMatrix, Vec<Mat3>)>,
     /// Chunk sums of [`Multigrid::apply`].
     partial: Vec<f64>,
-    /// Damp the smoothers by an upper bound of `ρ` (see [`Multigrid::refresh_bounded`]).
-    bound_damping: bool,
 }
 
 impl Multigrid {
@@ -250,27 +248,7 @@ impl Multigrid {
     /// structure is rebuilt when the pattern of `a` changed (or on the first call), the values
     /// always.
     pub fn refresh(&mut self, a: &BlockMatrix, s: &[Mat3]) {
-        let t0 = std::time::Instant::now();
-        let rebuild = self.levels.first().is_none_or(|l| !l.a.same_pattern(a));
-        if rebuild {
-            match self.reference.take() {
-                Some((r, rs)) if r.same_pattern(a) => {
-                    self.build(&r, &rs);
-                    numeric::refresh(self, a, s);
-                    self.reference = Some((r, rs));
-                }
-                other => {
-                    self.reference = other;
-                    self.build(a, s);
-                }
-            }
-            self.times.structure = t0.elapsed().as_secs_f64();
-            self.times.values = 0.0;
-        } else {
-            numeric::refresh(self, a, s);
-            self.times.structure = 0.0;
-            self.times.values = t0.elapsed().as_secs_f64();
-        }
+        self.refresh_damped(a, s, false);
     }
 
     /// [`Multigrid::refresh`] with every smoother damped by the Gershgorin bound of
@@ -278,9 +256,32 @@ impl Multigrid {
     /// so a positive definite cycle for a symmetric positive definite `a`, at the price of
     /// weaker smoothing. For a solve whose preconditioner turned out indefinite.
     pub fn refresh_bounded(&mut self, a: &BlockMatrix, s: &[Mat3]) {
-        self.bound_damping = true;
-        self.refresh(a, s);
-        self.bound_damping = false;
+        self.refresh_damped(a, s, true);
+    }
+
+    /// [`Multigrid::refresh`], the smoothers damped by a bound of `ρ` when `bound` is set.
+    fn refresh_damped(&mut self, a: &BlockMatrix, s: &[Mat3], bound: bool) {
+        let t0 = std::time::Instant::now();
+        let rebuild = self.levels.first().is_none_or(|l| !l.a.same_pattern(a));
+        if rebuild {
+            match self.reference.take() {
+                Some((r, rs)) if r.same_pattern(a) => {
+                    self.build(&r, &rs, bound);
+                    numeric::refresh(self, a, s, bound);
+                    self.reference = Some((r, rs));
+                }
+                other => {
+                    self.reference = other;
+                    self.build(a, s, bound);
+                }
+            }
+            self.times.structure = t0.elapsed().as_secs_f64();
+            self.times.values = 0.0;
+        } else {
+            numeric::refresh(self, a, s, bound);
+            self.times.structure = 0.0;
+            self.times.values = t0.elapsed().as_secs_f64();
+        }
     }
 
     /// Forgets the structure: the next refresh rebuilds it from the values it is given.
@@ -338,7 +339,7 @@ impl Multigrid {
         self.levels.iter().map(|l| l.a.nnz_blocks()).collect()
     }
 
-    fn build(&mut self, a: &BlockMatrix, s: &[Mat3]) {
+    fn build(&mut self, a: &BlockMatrix, s: &[Mat3], bound: bool) {
         self.levels.clear();
         let mut fine = Level::new(a.clone());
         numeric::filter_matrix(a, s, &mut fine.a, &mut fine.sym);
@@ -350,7 +351,7 @@ impl Multigrid {
             if l > 0 {
                 lvl.sym.set_values(&lvl.a);
             }
-            numeric::smoother(lvl, &self.params, self.bound_damping);
+            numeric::smoother(lvl, &self.params, bound);
             if n <= self.params.coarse_size || l + 1 >= self.params.max_levels {
                 break;
             }

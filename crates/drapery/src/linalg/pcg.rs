@@ -187,29 +187,18 @@ pub fn solve_preconditioned_by(
     let target = settings.tolerance * r0;
     let mut stats = SolveStats::default();
     let mut rnorm = dot(&w.r, &w.r).sqrt();
-    for attempt in 0..2 {
-        if attempt == 1 {
-            if !(stats.bad_preconditioner && multigrid) {
-                break;
-            }
-            // The cycle was not positive definite (a power estimate of ρ(D⁻¹A) far below ρ
-            // leaves ω ρ ≥ 2): damp its smoothers by an upper bound of ρ instead, and restart
-            // the conjugate directions from the current iterate.
-            w.amg.refresh_bounded(p, s);
-            stats.bad_preconditioner = false;
-            stats.bounded_damping = true;
-        }
-        iterate(
-            a,
-            s,
-            x,
-            settings,
-            w,
-            target,
-            filtered_product,
-            &mut stats,
-            &mut rnorm,
-        );
+    let mut run = |w: &mut PcgScratch, stats: &mut SolveStats, rnorm: &mut f64| {
+        iterate(a, s, x, settings, w, target, filtered_product, stats, rnorm)
+    };
+    run(w, &mut stats, &mut rnorm);
+    if stats.bad_preconditioner && multigrid {
+        // The cycle was not positive definite (a power estimate of ρ(D⁻¹A) far below ρ leaves
+        // ω ρ ≥ 2): damp its smoothers by an upper bound of ρ instead, and restart the
+        // conjugate directions from the current iterate.
+        w.amg.refresh_bounded(p, s);
+        stats.bad_preconditioner = false;
+        stats.bounded_damping = true;
+        run(w, &mut stats, &mut rnorm);
     }
     stats.relative_residual = rnorm / r0;
     stats.converged = rnorm <= target && rnorm.is_finite();

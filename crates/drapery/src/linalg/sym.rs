@@ -173,13 +173,14 @@ impl SymBlockMatrix {
     }
 }
 
-/// Rows `first..first + y.len()` of the product, less the remote terms: `y_i += A_ij x_j` for
-/// the stored blocks of row `i` (diagonal first) and `y_j += A_ijᵀ x_i` for the rows `j` of the
-/// same range, rows in order.
+// `rows`: the AVX form when the build has AVX, `rows_scalar` otherwise.
 #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
 use avx::rows;
 
-/// The portable [`rows`] (and the reference the AVX one is tested against).
+/// Rows `first..first + y.len()` of the product, less the remote terms: `y_i += A_ij x_j` for
+/// the stored blocks of row `i` (diagonal first) and `y_j += A_ijᵀ x_i` for the rows `j` of the
+/// same range, rows in order. The portable form, and the reference the AVX one is tested
+/// against.
 #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx"), allow(dead_code))]
 fn rows_scalar(
     row_ptr: &[u32],

@@ -12,12 +12,12 @@ use rayon::prelude::*;
 /// Rows per parallel task.
 const ROWS: usize = 128;
 
-/// Recomputes every value for a new matrix of the same pattern.
-pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3]) {
+/// Recomputes every value for a new matrix of the same pattern (the smoothers damped by a
+/// bound of `ρ` when `bound` is set, see [`smoother`]).
+pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3], bound: bool) {
     let fine = &mut mg.levels[0];
     filter_matrix(a, s, &mut fine.a, &mut fine.sym);
     let params = mg.params;
-    let bound = mg.bound_damping;
     for l in 0..mg.levels.len() {
         let (head, tail) = mg.levels.split_at_mut(l + 1);
         let lvl = &mut head[l];

@@ -29,36 +29,32 @@ pub(crate) fn store3(v: &mut Vec3, a: __m256d) {
     }
 }
 
-/// `acc += a b`.
+/// The columns of `m` as 4-lane vectors (lane 3 is the next column's first entry, or 0 for
+/// the third).
 #[inline(always)]
-pub(crate) fn add_mul(acc: &mut Mat3, a: &Mat3, b: &Mat3) {
-    let pa = a as *const Mat3 as *const f64;
-    let pc = acc as *mut Mat3 as *mut f64;
+pub(crate) fn columns(m: &Mat3) -> [__m256d; 3] {
+    let p = m as *const Mat3 as *const f64;
     // SAFETY: the 4-lane loads at 0 and 3 end at 4 and 7, within the nine `f64` of a `Mat3`
-    // (`#[repr(C)]`, three columns); the third column goes through `load3`/`store3`. The
-    // 4-lane store of column 0 writes a wrong lane 3 (column 1's first entry), which the store
-    // of column 1, loaded before, then overwrites.
+    // (`#[repr(C)]`, three columns); the third column goes through `load3`.
     unsafe {
-        let (c0, c1, c2) = (
-            _mm256_loadu_pd(pa),
-            _mm256_loadu_pd(pa.add(3)),
-            load3(&a.z_axis),
-        );
-        let column = |b: &Vec3| {
-            let x = _mm256_mul_pd(c0, _mm256_set1_pd(b.x));
-            let y = _mm256_mul_pd(c1, _mm256_set1_pd(b.y));
-            let z = _mm256_mul_pd(c2, _mm256_set1_pd(b.z));
-            _mm256_add_pd(_mm256_add_pd(x, y), z)
-        };
-        let (r0, r1, r2) = (column(&b.x_axis), column(&b.y_axis), column(&b.z_axis));
-        let (a0, a1, a2) = (
-            _mm256_loadu_pd(pc),
-            _mm256_loadu_pd(pc.add(3)),
-            load3(&acc.z_axis),
-        );
-        _mm256_storeu_pd(pc, _mm256_add_pd(a0, r0));
-        _mm256_storeu_pd(pc.add(3), _mm256_add_pd(a1, r1));
-        store3(&mut acc.z_axis, _mm256_add_pd(a2, r2));
+        [
+            _mm256_loadu_pd(p),
+            _mm256_loadu_pd(p.add(3)),
+            load3(&m.z_axis),
+        ]
+    }
+}
+
+/// `m v` for the columns `c` of `m`, added in glam's order `(c₀ x + c₁ y) + c₂ z` (lane 3 is
+/// not used).
+#[inline(always)]
+pub(crate) fn times(c: &[__m256d; 3], v: &Vec3) -> __m256d {
+    // SAFETY: register arithmetic only; the build has AVX.
+    unsafe {
+        let x = _mm256_mul_pd(c[0], _mm256_set1_pd(v.x));
+        let y = _mm256_mul_pd(c[1], _mm256_set1_pd(v.y));
+        let z = _mm256_mul_pd(c[2], _mm256_set1_pd(v.z));
+        _mm256_add_pd(_mm256_add_pd(x, y), z)
     }
 }
 
@@ -67,16 +63,8 @@ pub(crate) fn add_mul(acc: &mut Mat3, a: &Mat3, b: &Mat3) {
 pub(crate) fn add_products(acc: Vec3, blocks: &[Mat3], cols: &[u32], x: &[Vec3]) -> Vec3 {
     let mut a = load3(&acc);
     for (m, &j) in blocks.iter().zip(cols) {
-        let p = m as *const Mat3 as *const f64;
-        let v = &x[j as usize];
-        // SAFETY: the 4-lane loads at 0 and 3 end within the `Mat3`; the third column goes
-        // through `load3`.
-        unsafe {
-            let x = _mm256_mul_pd(_mm256_loadu_pd(p), _mm256_set1_pd(v.x));
-            let y = _mm256_mul_pd(_mm256_loadu_pd(p.add(3)), _mm256_set1_pd(v.y));
-            let z = _mm256_mul_pd(load3(&m.z_axis), _mm256_set1_pd(v.z));
-            a = _mm256_add_pd(a, _mm256_add_pd(_mm256_add_pd(x, y), z));
-        }
+        // SAFETY: register arithmetic only.
+        a = unsafe { _mm256_add_pd(a, times(&columns(m), &x[j as usize])) };
     }
     let mut out = Vec3::ZERO;
     store3(&mut out, a);
@@ -86,24 +74,16 @@ pub(crate) fn add_products(acc: Vec3, blocks: &[Mat3], cols: &[u32], x: &[Vec3])
 /// `Σ left[l] right[r]` over `[l, r]` in `terms`, in order from zero.
 #[inline(always)]
 pub(crate) fn sum_products(left: &[Mat3], right: &[Mat3], terms: &[[u32; 2]]) -> Mat3 {
-    // SAFETY: as in `add_mul`: 4-lane loads and stores at 0 and 3 of a `Mat3`, `load3` and
-    // `store3` for its third column; the stores go in column order, so each one's fourth lane
-    // is overwritten by the next.
+    // SAFETY: register arithmetic, then 4-lane stores at 0 and 3 of a `Mat3` and `store3` for
+    // its third column, in column order, so that each store's lane 3 (the next column's first
+    // entry) is overwritten by the next one.
     unsafe {
-        let zero = _mm256_setzero_pd();
-        let mut acc = [zero; 3];
+        let mut acc = [_mm256_setzero_pd(); 3];
         for &[l, r] in terms {
-            let a = &left[l as usize];
-            let pa = a as *const Mat3 as *const f64;
-            let c0 = _mm256_loadu_pd(pa);
-            let c1 = _mm256_loadu_pd(pa.add(3));
-            let c2 = load3(&a.z_axis);
+            let c = columns(&left[l as usize]);
             let b = &right[r as usize];
             for (acc, col) in acc.iter_mut().zip([&b.x_axis, &b.y_axis, &b.z_axis]) {
-                let x = _mm256_mul_pd(c0, _mm256_set1_pd(col.x));
-                let y = _mm256_mul_pd(c1, _mm256_set1_pd(col.y));
-                let z = _mm256_mul_pd(c2, _mm256_set1_pd(col.z));
-                *acc = _mm256_add_pd(*acc, _mm256_add_pd(_mm256_add_pd(x, y), z));
+                *acc = _mm256_add_pd(*acc, times(&c, col));
             }
         }
         let mut out = Mat3::ZERO;

@@ -5,12 +5,12 @@
 //! ([`super::rows_scalar`]), so the bits are the same (a dot product's last term gains `+ 0`,
 //! which can only turn a `-0` into `+0`).
 
-use crate::linalg::block::avx::{load3, store3};
+use crate::linalg::block::avx::{load3, store3, times};
 use crate::math::{Mat3, Vec3};
 use std::arch::x86_64::*;
 
-/// See [`super::rows_scalar`]; `values` must be followed by at least one more `f64` in memory
-/// (the padding block of [`super::SymBlockMatrix`]), which `blocks` excludes.
+/// See [`super::rows_scalar`]; `values` must hold one block past the last one these rows use
+/// (the padding block of [`super::SymBlockMatrix`]), which the third column's load reads into.
 pub(super) fn rows(
     row_ptr: &[u32],
     col: &[u32],
@@ -29,24 +29,16 @@ pub(super) fn rows(
         // SAFETY: block k's columns start at 9 k, 9 k + 3 and 9 k + 6; each 4-lane load ends
         // at most at 9 k + 9, within block k + 1 ≤ `last`, which is in `values` (asserted).
         unsafe {
-            let column = |k: usize, c: usize| _mm256_loadu_pd(v.add(9 * k + 3 * c));
-            let times = |k: usize, u: &Vec3| {
-                let a = _mm256_mul_pd(column(k, 0), _mm256_set1_pd(u.x));
-                let b = _mm256_mul_pd(column(k, 1), _mm256_set1_pd(u.y));
-                let c = _mm256_mul_pd(column(k, 2), _mm256_set1_pd(u.z));
-                _mm256_add_pd(_mm256_add_pd(a, b), c)
-            };
+            let columns = |k: usize| [0, 3, 6].map(|c| _mm256_loadu_pd(v.add(9 * k + c)));
             // the diagonal block first, as in the scalar order
-            let mut acc = _mm256_add_pd(load3(&y[i - first]), times(s, &x[i]));
+            let mut acc = _mm256_add_pd(load3(&y[i - first]), times(&columns(s), &x[i]));
             for (k, &j) in (s + 1..e).zip(&col[s + 1..e]) {
                 let j = j as usize;
-                acc = _mm256_add_pd(acc, times(k, &x[j]));
+                let c = columns(k);
+                acc = _mm256_add_pd(acc, times(&c, &x[j]));
                 if j < end {
-                    let h01 = _mm256_hadd_pd(
-                        _mm256_mul_pd(column(k, 0), xi),
-                        _mm256_mul_pd(column(k, 1), xi),
-                    );
-                    let t2 = _mm256_mul_pd(column(k, 2), xi);
+                    let h01 = _mm256_hadd_pd(_mm256_mul_pd(c[0], xi), _mm256_mul_pd(c[1], xi));
+                    let t2 = _mm256_mul_pd(c[2], xi);
                     let h22 = _mm256_hadd_pd(t2, t2);
                     let lo = _mm256_permute2f128_pd(h01, h22, 0x20);
                     let hi = _mm256_permute2f128_pd(h01, h22, 0x31);
