@@ -5,16 +5,16 @@
 //! gravity and air drag; a 3×3-block sparse system solved by filtered PCG or sparse Cholesky;
 //! pins as velocity filters.
 //!
-//! Data flows one way: scene → [`model::Model`] → [`integrator::Simulation::step`] → frames out.
+//! Data flows one way: scene → [`model::Model`] → [`step::Simulation::step`] → frames out.
 //! The library never prints and never exits: every failure is an [`Error`] value.
 #![warn(missing_docs)]
 // `unsafe` only in the AVX block kernels (`linalg::block::avx`, `linalg::sym::avx`), which allow it
 #![deny(unsafe_code)]
 
 pub mod collision;
+pub mod constraints;
 pub mod error;
 pub mod forces;
-pub mod integrator;
 pub mod io;
 pub mod linalg;
 pub mod math;
@@ -23,9 +23,10 @@ pub mod model;
 pub mod presets;
 pub mod render;
 pub mod scene;
+pub mod step;
 
 pub use error::{Error, Result};
-pub use integrator::{LinearSolver, Simulation, SolverSettings, StepReport};
+pub use step::{LinearSolver, Simulation, SolverSettings, StageTimes, StepReport};
 pub use math::{Mat3, Vec3};
 pub use mesh::{Face, Mesh};
 pub use model::{ClothDesc, MassSpec, Material, Model};

@@ -1,5 +1,10 @@
-//! Coulomb friction of cloth–cloth contacts (vertex–triangle and edge–edge repulsion stencils),
-//! applied to the velocities after the solve.
+//! Coulomb friction, applied to the velocities after the solve: cloth–cloth contacts first
+//! ([`apply_contact_friction`]), then obstacle contacts ([`apply_obstacle_friction`]), which
+//! bound what holds a pile.
+//!
+//! ## Cloth–cloth
+//!
+//! Cloth–cloth contacts are vertex–triangle and edge–edge repulsion stencils.
 //!
 //! A stencil (particles `xᵢ`, weights `wᵢ` summing to zero, unit normal `n`, see
 //! [`super::repulsion`]) has the relative velocity `u = Σ wᵢ vᵢ` of its two closest points.
@@ -35,6 +40,7 @@
 
 use super::proximity::Proximity;
 use super::repulsion::Penalty;
+use crate::constraints::obstacle::ObstacleContact;
 use crate::math::Vec3;
 
 /// Most sweeps of the pass that takes back the approach friction added to other contacts (it
@@ -136,6 +142,41 @@ pub fn apply_contact_friction(
         if !changed {
             break;
         }
+    }
+}
+
+/// Obstacle contacts after the solve (`contacts` as the active set held them, with the normal
+/// impulses `impulse` their constraints exerted): each particle's normal velocity is set to the
+/// surface's (the contact is inelastic: the particle ends the step resting on the surface, not
+/// flying off it), then Coulomb friction acts on the tangential velocity relative to the
+/// surface, which loses up to `μ λ / m` (static friction when it would reverse).
+pub fn apply_obstacle_friction(
+    v: &mut [Vec3],
+    mass: &[f64],
+    contacts: &[ObstacleContact],
+    impulse: &[f64],
+) {
+    for ct in contacts {
+        let i = ct.particle as usize;
+        let vn = ct.normal.dot(v[i]);
+        v[i] += ct.normal * (ct.normal.dot(ct.surface_velocity) - vn);
+    }
+    for (c, &lambda) in contacts.iter().zip(impulse) {
+        if !(lambda > 0.0) || c.friction == 0.0 {
+            continue;
+        }
+        let i = c.particle as usize;
+        let rel = v[i] - c.surface_velocity;
+        let vn = c.normal * c.normal.dot(rel);
+        let vt = rel - vn;
+        let speed = vt.length();
+        let limit = c.friction * lambda / mass[i];
+        let vt = if speed <= limit {
+            Vec3::ZERO
+        } else {
+            vt * (1.0 - limit / speed)
+        };
+        v[i] = c.surface_velocity + vn + vt;
     }
 }
 

@@ -25,6 +25,6 @@ pub mod friction;
 pub mod predicates;
 pub mod proximity;
 pub mod repulsion;
-pub mod response;
+pub mod failsafe;
 pub mod settings;
 pub mod tessellate;

@@ -1,5 +1,5 @@
 use super::*;
-use crate::integrator::{Simulation, SolverSettings};
+use crate::step::{Simulation, SolverSettings};
 use crate::linalg::direct::DirectSolver;
 use crate::linalg::pcg::{self, PcgScratch, PcgSettings, Preconditioner};
 use crate::math::outer;

@@ -1,16 +1,6 @@
-//! Collision response around the implicit solve.
+//! The collision fail-safe: after the solve and friction, nothing may have passed through
+//! anything over the step (docs/MATH.md §4).
 //!
-//! Before the solve:
-//! * [`obstacle_contacts`]: particles within the thickness of an obstacle (and not moving away
-//!   from it) become velocity constraints of the filtered solve (MATH.md §5): their normal
-//!   velocity relative to the obstacle is prescribed so that they end the step at the thickness.
-//! * cloth–cloth close pairs become repulsion stencils ([`crate::forces::Repulsions`]), whose
-//!   Jacobians enter the same matrix.
-//!
-//! After the solve, Coulomb friction acts on the cloth–cloth contacts
-//! ([`super::friction::apply_contact_friction`]) and then on the obstacle contacts
-//! ([`apply_friction`]); then [`failsafe`] guarantees that nothing passed through anything over
-//! the step:
 //! * each particle's straight path is swept against the analytic obstacles (conservative
 //!   advancement on their signed distance, which is 1-Lipschitz); a particle that would come
 //!   within a tenth of the thickness stops there and moves rigidly with the obstacle for the rest
@@ -36,113 +26,6 @@ use super::settings::Obstacle;
 use crate::math::Vec3;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
-
-/// A particle held against an obstacle during the solve.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ObstacleContact {
-    /// Particle index.
-    pub particle: u32,
-    /// Unit normal pointing from the obstacle to the particle.
-    pub normal: Vec3,
-    /// Normal velocity the particle must have at the end of the step, m/s.
-    pub normal_velocity: f64,
-    /// Velocity of the obstacle surface at the contact.
-    pub surface_velocity: Vec3,
-    /// Coulomb coefficient.
-    pub friction: f64,
-}
-
-/// The closest contact of `p` with `o` at time `t`: (distance on the particle's side, unit
-/// normal toward the particle, surface velocity).
-fn contact(o: &Obstacle, p: Vec3, t: f64) -> (f64, Vec3, Vec3) {
-    let c = o.collider.closest(p, t);
-    match o.collider.shape {
-        Shape::Mesh(_) => {
-            let d = p - c.point;
-            let l = d.length();
-            let n = if l > 1e-12 { d / l } else { c.normal * c.side };
-            (l, n, c.velocity_at_point)
-        }
-        _ => (c.signed_distance, c.normal, c.velocity_at_point),
-    }
-}
-
-/// Contacts at the start of a step: free particles within twice the `thickness` of an obstacle
-/// whose normal velocity relative to it is below what would bring them to the thickness in one
-/// step, plus `slack` (use `|g| h`: gravity can turn a particle around within the step, and
-/// rounding must not drop a particle resting exactly at the thickness). The constraint prescribes exactly that normal velocity; the solver releases every
-/// contact whose impulse would pull (see the active-set loop in the integrator), so a particle
-/// only feels the obstacle when it would otherwise end closer than the thickness. Resting
-/// contact therefore holds every step (no alternating contact and free flight), which is what
-/// lets static friction hold. The deepest obstacle wins when there are several.
-#[allow(clippy::too_many_arguments)]
-pub fn obstacle_contacts(
-    x: &[Vec3],
-    v: &[Vec3],
-    pinned: &[bool],
-    obstacles: &[Obstacle],
-    t: f64,
-    h: f64,
-    thickness: f64,
-    slack: f64,
-) -> Vec<ObstacleContact> {
-    if obstacles.is_empty() {
-        return Vec::new();
-    }
-    let per: Vec<Option<ObstacleContact>> = (0..x.len())
-        .into_par_iter()
-        .with_min_len(256)
-        .map(|i| {
-            if pinned[i] {
-                return None;
-            }
-            let mut best: Option<(f64, ObstacleContact)> = None;
-            for o in obstacles {
-                let (d, n, vs) = contact(o, x[i], t);
-                if d < 2.0 * thickness && best.as_ref().is_none_or(|(bd, _)| d < *bd) {
-                    let target = n.dot(vs) + (thickness - d) / h;
-                    if n.dot(v[i]) <= target + slack {
-                        best = Some((
-                            d,
-                            ObstacleContact {
-                                particle: i as u32,
-                                normal: n,
-                                normal_velocity: target,
-                                surface_velocity: vs,
-                                friction: o.friction,
-                            },
-                        ));
-                    }
-                }
-            }
-            best.map(|(_, c)| c)
-        })
-        .collect();
-    per.into_iter().flatten().collect()
-}
-
-/// Applies Coulomb friction to constrained particles after the solve: the tangential velocity
-/// relative to the surface loses up to `μ λ / m`, where `λ` is the normal impulse the
-/// constraint exerted (static friction when it would reverse).
-pub fn apply_friction(v: &mut [Vec3], mass: &[f64], contacts: &[ObstacleContact], impulse: &[f64]) {
-    for (c, &lambda) in contacts.iter().zip(impulse) {
-        if !(lambda > 0.0) || c.friction == 0.0 {
-            continue;
-        }
-        let i = c.particle as usize;
-        let rel = v[i] - c.surface_velocity;
-        let vn = c.normal * c.normal.dot(rel);
-        let vt = rel - vn;
-        let speed = vt.length();
-        let limit = c.friction * lambda / mass[i];
-        let vt = if speed <= limit {
-            Vec3::ZERO
-        } else {
-            vt * (1.0 - limit / speed)
-        };
-        v[i] = c.surface_velocity + vn + vt;
-    }
-}
 
 /// What the fail-safe did.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]

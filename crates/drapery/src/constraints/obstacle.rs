@@ -1,0 +1,293 @@
+//! Obstacle contacts as constraints of the solve, on an active set (docs/MATH.md §5).
+//!
+//! [`find`] lists the candidates at the start of a step: free particles close to an obstacle
+//! and not moving away from it fast enough. A held candidate prescribes the particle's normal
+//! velocity (so it ends the step at the thickness) and leaves its tangential velocity free.
+//! [`ActiveSet`] decides which candidates are held: a contact whose impulse would pull is
+//! released, a released one whose particle would sink is held again, and the system is solved
+//! again. What the last round holds stays for the step (friction uses those contacts and
+//! impulses) and is examined afresh at the next step.
+
+use super::Constraints;
+use crate::collision::colliders::Shape;
+use crate::collision::settings::Obstacle;
+use crate::linalg::BlockMatrix;
+use crate::math::Vec3;
+use rayon::prelude::*;
+
+/// A particle held against an obstacle during the solve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ObstacleContact {
+    /// Particle index.
+    pub particle: u32,
+    /// Unit normal pointing from the obstacle to the particle.
+    pub normal: Vec3,
+    /// Normal velocity the particle must have at the end of the step, m/s.
+    pub normal_velocity: f64,
+    /// Velocity of the obstacle surface at the contact.
+    pub surface_velocity: Vec3,
+    /// Coulomb coefficient.
+    pub friction: f64,
+}
+
+/// The closest contact of `p` with `o` at time `t`: (distance on the particle's side, unit
+/// normal toward the particle, surface velocity).
+fn contact(o: &Obstacle, p: Vec3, t: f64) -> (f64, Vec3, Vec3) {
+    let c = o.collider.closest(p, t);
+    if matches!(o.collider.shape, Shape::Mesh(_)) {
+        let d = p - c.point;
+        let l = d.length();
+        let n = if l > 1e-12 { d / l } else { c.normal * c.side };
+        (l, n, c.velocity_at_point)
+    } else {
+        (c.signed_distance, c.normal, c.velocity_at_point)
+    }
+}
+
+/// Contacts at the start of a step: free particles within twice the `thickness` of an obstacle
+/// whose normal velocity relative to it is below what would bring them to the thickness in one
+/// step, plus `slack` (use `|g| h`: gravity can turn a particle around within the step, and
+/// rounding must not drop a particle resting exactly at the thickness). The constraint
+/// prescribes exactly that normal velocity; the [`ActiveSet`] releases every contact whose
+/// impulse would pull, so a particle only feels the obstacle when it would otherwise end closer
+/// than the thickness. Resting contact therefore holds every step (no alternating contact and
+/// free flight), which is what lets static friction hold. The deepest obstacle wins when there
+/// are several.
+#[allow(clippy::too_many_arguments)]
+pub fn find(
+    x: &[Vec3],
+    v: &[Vec3],
+    pinned: &[bool],
+    obstacles: &[Obstacle],
+    t: f64,
+    h: f64,
+    thickness: f64,
+    slack: f64,
+) -> Vec<ObstacleContact> {
+    if obstacles.is_empty() {
+        return Vec::new();
+    }
+    let per: Vec<Option<ObstacleContact>> = (0..x.len())
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|i| {
+            if pinned[i] {
+                return None;
+            }
+            let mut best: Option<(f64, ObstacleContact)> = None;
+            for o in obstacles {
+                let (d, n, vs) = contact(o, x[i], t);
+                if d < 2.0 * thickness && best.as_ref().is_none_or(|(bd, _)| d < *bd) {
+                    let target = n.dot(vs) + (thickness - d) / h;
+                    if n.dot(v[i]) <= target + slack {
+                        best = Some((
+                            d,
+                            ObstacleContact {
+                                particle: i as u32,
+                                normal: n,
+                                normal_velocity: target,
+                                surface_velocity: vs,
+                                friction: o.friction,
+                            },
+                        ));
+                    }
+                }
+            }
+            best.map(|(_, c)| c)
+        })
+        .collect();
+    per.into_iter().flatten().collect()
+}
+
+/// Which candidate contacts are held, and the normal impulse each one's constraint exerted in
+/// the last solve.
+#[derive(Clone, Debug, Default)]
+pub struct ActiveSet {
+    candidates: Vec<ObstacleContact>,
+    active: Vec<bool>,
+    impulse: Vec<f64>,
+}
+
+impl ActiveSet {
+    /// Every candidate held, no impulse yet.
+    pub fn new(candidates: Vec<ObstacleContact>) -> ActiveSet {
+        let n = candidates.len();
+        ActiveSet {
+            candidates,
+            active: vec![true; n],
+            impulse: vec![0.0; n],
+        }
+    }
+
+    /// True when there are no candidates.
+    pub fn is_empty(&self) -> bool {
+        self.candidates.is_empty()
+    }
+
+    /// Writes the held contacts into `c` (after the pins), from the current velocities `v`.
+    pub fn hold(&self, v: &[Vec3], c: &mut Constraints) {
+        for (ct, _) in self.candidates.iter().zip(&self.active).filter(|(_, a)| **a) {
+            let i = ct.particle as usize;
+            c.hold_normal(i, ct.normal, ct.normal_velocity, v[i]);
+        }
+    }
+
+    /// Before the first solve of a step: predicts from the initial guess `dv` which contacts
+    /// would pull (`n·(A w - rhs) < 0` for `w = z + S dv`), and releases those whose guessed
+    /// velocity leaves the surface anyway. `w` and `r` are scratch vectors.
+    #[allow(clippy::too_many_arguments)]
+    pub fn predict(
+        &mut self,
+        a: &BlockMatrix,
+        rhs: &[Vec3],
+        v: &[Vec3],
+        dv: &[Vec3],
+        c: &mut Constraints,
+        w: &mut [Vec3],
+        r: &mut [Vec3],
+    ) {
+        for i in 0..w.len() {
+            w[i] = c.z[i] + c.filter[i] * dv[i];
+        }
+        a.mul_vec(w, r);
+        for (ct, act) in self.candidates.iter().zip(self.active.iter_mut()) {
+            let i = ct.particle as usize;
+            let pulls = ct.normal.dot(r[i] - rhs[i]) < 0.0;
+            let leaves = ct.normal.dot(v[i] + dv[i]) >= ct.normal_velocity;
+            if pulls && leaves {
+                *act = false;
+                c.release(i);
+            }
+        }
+    }
+
+    /// After a solve: each candidate's normal impulse `n·(A dv - rhs)` (scaled by `1/h`, the
+    /// force the constraint exerted). `r` is scratch.
+    pub fn measure(&mut self, a: &BlockMatrix, rhs: &[Vec3], dv: &[Vec3], r: &mut [Vec3]) {
+        a.mul_vec(dv, r);
+        for (ct, l) in self.candidates.iter().zip(self.impulse.iter_mut()) {
+            let i = ct.particle as usize;
+            *l = ct.normal.dot(r[i] - rhs[i]);
+        }
+    }
+
+    /// Flips held contacts that pull (beyond a relative `1e-9` of the largest held impulse) and
+    /// released ones whose solved normal velocity `n·(v + dv)` is below the prescribed one by
+    /// more than `sink_tolerance`. Returns whether anything changed.
+    pub fn update(&mut self, v: &[Vec3], dv: &[Vec3], sink_tolerance: f64) -> bool {
+        let scale = self
+            .candidates
+            .iter()
+            .zip(&self.impulse)
+            .zip(&self.active)
+            .filter(|(_, a)| **a)
+            .fold(0.0f64, |m, ((_, l), _)| m.max(l.abs()));
+        let mut changed = false;
+        for ((ct, l), a) in self
+            .candidates
+            .iter()
+            .zip(&self.impulse)
+            .zip(self.active.iter_mut())
+        {
+            let i = ct.particle as usize;
+            let flip = if *a {
+                *l < -1e-9 * scale
+            } else {
+                ct.normal.dot(v[i] + dv[i]) < ct.normal_velocity - sink_tolerance
+            };
+            if flip {
+                *a = !*a;
+                changed = true;
+            }
+        }
+        changed
+    }
+
+    /// The held contacts and their impulses.
+    pub fn held(&self) -> (Vec<ObstacleContact>, Vec<f64>) {
+        self.candidates
+            .iter()
+            .zip(&self.impulse)
+            .zip(&self.active)
+            .filter(|(_, a)| **a)
+            .map(|((c, l), _)| (*c, *l))
+            .unzip()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::colliders::Collider;
+
+    fn ground() -> Obstacle {
+        Obstacle {
+            collider: Collider::fixed(Shape::Plane {
+                point: Vec3::ZERO,
+                normal: Vec3::Y,
+            }),
+            friction: 0.5,
+        }
+    }
+
+    #[test]
+    fn candidates_are_the_close_free_particles_not_leaving_fast_enough() {
+        let (thickness, h) = (0.01, 0.01);
+        let x = [
+            Vec3::new(0.0, 0.005, 0.0), // inside the thickness, at rest
+            Vec3::new(0.0, 0.015, 0.0), // within twice the thickness, falling
+            Vec3::new(0.0, 0.015, 0.0), // within twice, leaving fast
+            Vec3::new(0.0, 0.5, 0.0),   // far
+            Vec3::new(0.0, 0.001, 0.0), // pinned
+        ];
+        let v = [
+            Vec3::ZERO,
+            Vec3::new(0.0, -1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(0.0, -1.0, 0.0),
+            Vec3::ZERO,
+        ];
+        let pinned = [false, false, false, false, true];
+        let c = find(&x, &v, &pinned, &[ground()], 0.0, h, thickness, 0.0);
+        let ids: Vec<u32> = c.iter().map(|c| c.particle).collect();
+        assert_eq!(ids, vec![0, 1]);
+        // the prescribed normal velocity brings the particle to the thickness in one step
+        for ct in &c {
+            let i = ct.particle as usize;
+            assert!((x[i].y + h * ct.normal_velocity - thickness).abs() < 1e-15);
+            assert_eq!((ct.normal, ct.friction), (Vec3::Y, 0.5));
+        }
+    }
+
+    #[test]
+    fn a_contact_that_pulls_is_released_and_one_that_sinks_is_held_again() {
+        let ct = |i: u32| ObstacleContact {
+            particle: i,
+            normal: Vec3::Y,
+            normal_velocity: 0.0,
+            surface_velocity: Vec3::ZERO,
+            friction: 0.0,
+        };
+        let mut set = ActiveSet::new(vec![ct(0), ct(1)]);
+        // identity matrix: the impulse of a contact is n·(dv - rhs)
+        let a = BlockMatrix::from_pairs(2, &[]);
+        let mut a = a;
+        a.set_block_diagonal(|_| crate::math::Mat3::IDENTITY);
+        let rhs = [Vec3::new(0.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+        let dv = [Vec3::ZERO, Vec3::ZERO];
+        let mut r = [Vec3::ZERO; 2];
+        set.measure(&a, &rhs, &dv, &mut r);
+        // particle 0 is pushed up by the constraint (rhs pulls it down), particle 1 pulled down
+        assert!(set.update(&[Vec3::ZERO; 2], &dv, 1e-3));
+        let (held, impulse) = set.held();
+        assert_eq!(held.len(), 1);
+        assert_eq!((held[0].particle, impulse[0]), (0, 1.0));
+        // released particle 1 now sinks below the prescribed normal velocity: held again
+        let sinking = [Vec3::ZERO, Vec3::new(0.0, -1.0, 0.0)];
+        assert!(set.update(&sinking, &dv, 1e-3));
+        assert_eq!(set.held().0.len(), 2);
+        // nothing to flip: unchanged
+        set.measure(&a, &[Vec3::new(0.0, -1.0, 0.0); 2], &dv, &mut r);
+        assert!(!set.update(&[Vec3::ZERO; 2], &dv, 1e-3));
+    }
+}

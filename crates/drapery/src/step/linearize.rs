@@ -1,0 +1,91 @@
+//! The linearize stage: forces, system matrix and right-hand side of one Newton iteration
+//! (docs/MATH.md §1).
+//!
+//! At the iterate `(x, v)` (the start of the step at the first iteration), with
+//! `w = x₀ + h v - x` (zero at the first iteration):
+//!
+//! ```text
+//! A = M - h D - h² K          rhs = M (v₀ - v) + h f + h K w
+//! ```
+//!
+//! and the iteration solves `A Δv = rhs`. Every force gives its force, matrix blocks and the
+//! product `K w` from one evaluation ([`crate::forces::Force::add_linearization`]).
+
+use super::system::System;
+use crate::forces::{Force, Linearization, Repulsions};
+use crate::math::Vec3;
+use rayon::prelude::*;
+
+/// Particles per task in the per-particle parallel loops.
+const PARTICLES: usize = 1024;
+
+/// Where a Newton iteration linearizes.
+pub(crate) struct Iterate<'a> {
+    /// Start of the step.
+    pub x0: &'a [Vec3],
+    /// Start of the step.
+    pub v0: &'a [Vec3],
+    /// Current positions.
+    pub x: &'a [Vec3],
+    /// Current velocities.
+    pub v: &'a [Vec3],
+    /// Step, s.
+    pub h: f64,
+}
+
+/// The stage's outputs, and its scratch (kept between steps).
+#[derive(Default)]
+pub(crate) struct Linearized {
+    /// Total force at the iterate.
+    pub f: Vec<Vec3>,
+    /// Right-hand side of the iteration's system.
+    pub rhs: Vec<Vec3>,
+    /// `w = x₀ + h v - x`.
+    pub w: Vec<Vec3>,
+    /// `h K w`.
+    pub kw: Vec<Vec3>,
+}
+
+impl Linearized {
+    /// Buffers for `n` particles.
+    pub fn resize(&mut self, n: usize) {
+        for b in [&mut self.f, &mut self.rhs, &mut self.w, &mut self.kw] {
+            b.resize(n, Vec3::ZERO);
+        }
+    }
+}
+
+/// Assembles the system matrix into `system` and the right-hand side into `out.rhs`.
+pub(crate) fn run(
+    system: &mut System,
+    mass: &[f64],
+    forces: &[Box<dyn Force>],
+    contact: Option<&Repulsions>,
+    it: &Iterate,
+    out: &mut Linearized,
+) {
+    let Linearized { f, rhs, w, kw } = out;
+    let (x0, v0, x, v, h) = (it.x0, it.v0, it.x, it.v, it.h);
+    w.par_iter_mut()
+        .zip(f.par_iter_mut())
+        .zip(kw.par_iter_mut())
+        .enumerate()
+        .with_min_len(PARTICLES)
+        .for_each(|(i, ((wi, fi), kwi))| {
+            *wi = x0[i] + h * v[i] - x[i];
+            *fi = Vec3::ZERO;
+            *kwi = Vec3::ZERO;
+        });
+    let at = Linearization {
+        x,
+        v,
+        matrix: (-h * h, -h),
+        product: (h, 0.0),
+        w,
+    };
+    system.assemble(mass, forces, &at, contact, Some((&mut f[..], &mut kw[..])));
+    rhs.par_iter_mut()
+        .enumerate()
+        .with_min_len(PARTICLES)
+        .for_each(|(i, r)| *r = mass[i] * (v0[i] - v[i]) + h * f[i] + kw[i]);
+}

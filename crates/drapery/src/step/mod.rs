@@ -1,0 +1,393 @@
+//! Linearized implicit Euler (Baraff & Witkin 1998, docs/MATH.md §1), as a list of named stages.
+//!
+//! One step solves `(M - h D - h² K) Δv = h (f + h K v)` at `(x₀, v₀)`, then `v₁ = v₀ + Δv`,
+//! `x₁ = x₀ + h v₁`, with pins and obstacle contacts as velocity filters. [`Simulation::step`]
+//! reads as its stages, each a function in its own module with explicit inputs and outputs:
+//!
+//! | stage | module | does |
+//! |---|---|---|
+//! | guard | [`guard`] | a valid step size and a finite starting state |
+//! | pose | [`pose`] | colliders and pin targets over `[t, t + h]` |
+//! | detect | [`detect`] | obstacle contact candidates, self-contact stencils |
+//! | linearize | [`linearize`] | forces, `A`, right-hand side (per Newton iteration) |
+//! | constrain, solve | [`solve`] | filter `S` and `z`, filtered PCG on the obstacle active set |
+//! | update | [`newton`] | new velocities and positions, line search with several iterations |
+//! | friction | [`friction`] | cloth–cloth, then obstacle friction |
+//! | failsafe | [`failsafe`] | continuous collision detection: nothing crosses anything |
+//! | commit | [`guard`] | energy blow-up test, warm start, time |
+//!
+//! A step is transactional: the state changes only at commit, so when any stage fails the
+//! simulation is left as it was and an [`crate::Error::StepFailed`] says what and where.
+
+mod detect;
+mod failsafe;
+mod friction;
+mod guard;
+mod linearize;
+mod newton;
+mod pose;
+pub mod report;
+pub mod settings;
+mod solve;
+mod system;
+
+pub use report::{StageTimes, StepReport};
+pub use settings::{LinearSolver, SolverSettings};
+
+use crate::constraints::obstacle::ActiveSet;
+use crate::error::Result;
+use crate::forces::pair_sum::PairSums;
+use crate::forces::{AirDrag, Force, Gravity, Linearization, SpringDamping, Springs};
+use crate::linalg::BlockMatrix;
+use crate::linalg::pcg::Preconditioner;
+use crate::math::Vec3;
+use crate::model::Model;
+use guard::At;
+use linearize::{Iterate, Linearized};
+use newton::{Outcome, Potential};
+use report::timed;
+use solve::{Problem, Scratch, Solvers};
+use system::System;
+
+/// A model plus the solver's working memory. Advance it with [`Simulation::step`].
+pub struct Simulation {
+    /// The simulated state (positions and velocities are updated in place).
+    pub model: Model,
+    /// Step settings.
+    pub settings: SolverSettings,
+    /// Simulated time, s.
+    pub time: f64,
+    /// Steps taken so far.
+    pub steps: u64,
+    /// The previous step's velocity change, the PCG's initial guess for the next step (part of
+    /// the state: save and restore it to resume a run bit for bit).
+    pub warm_start: Vec<Vec3>,
+    forces: Vec<Box<dyn Force>>,
+    system: System,
+    /// State the simulation was created in (the multigrid's reference, see [`Self::reference`]).
+    initial: (Vec<Vec3>, Vec<Vec3>),
+    triangles: Vec<[u32; 3]>,
+    edges: Vec<[u32; 2]>,
+    work: Work,
+    solvers: Solvers,
+}
+
+/// Per-particle work vectors of a step, kept between steps.
+#[derive(Default)]
+struct Work {
+    linearized: Linearized,
+    solve: Scratch,
+    dv: Vec<Vec3>,
+}
+
+/// Strength-of-connection threshold of the multigrid, applied to the system matrix at the
+/// initial state (see [`Simulation::reference`]).
+const MULTIGRID_STRENGTH: f64 = 0.08;
+
+impl Simulation {
+    /// Prepares a simulation: builds the forces from the model, the matrix pattern and the
+    /// solver scratch.
+    pub fn new(model: Model, settings: SolverSettings) -> Result<Self> {
+        settings.validate()?;
+        if let Some(c) = &model.collision {
+            c.validate()?;
+        }
+        let forces = model_forces(&model, &settings);
+        let n = model.particle_count();
+        let system = System::new(n, &forces);
+        let (triangles, edges) = (model.triangles(), model.edges());
+        let initial = (model.x.clone(), model.v.clone());
+        Ok(Simulation {
+            warm_start: vec![Vec3::ZERO; n],
+            model,
+            settings,
+            time: 0.0,
+            steps: 0,
+            forces,
+            system,
+            initial,
+            triangles,
+            edges,
+            work: Work::default(),
+            solvers: Solvers::default(),
+        })
+    }
+
+    /// Advances by one step of `h` seconds. On error the state is left as it was before.
+    ///
+    /// The step runs on a thread of rayon's current pool (the caller waits), so that its many
+    /// short parallel loops are forked from inside the pool instead of each one being sent to
+    /// it from outside and waited for.
+    pub fn step(&mut self, h: f64) -> Result<StepReport> {
+        if rayon::current_thread_index().is_some() {
+            self.step_here(h)
+        } else {
+            rayon::scope(|_| self.step_here(h))
+        }
+    }
+
+    fn step_here(&mut self, h: f64) -> Result<StepReport> {
+        let mut report = StepReport::default();
+        let at = At {
+            steps: self.steps,
+            time: self.time,
+        };
+        let start = timed(&mut report.stages.guard, || {
+            guard::start(&self.model, at, h)
+        })?;
+        let pose = timed(&mut report.stages.pose, || {
+            self.reference(h);
+            pose::at(&self.model, self.time, h)
+        });
+        let contacts = timed(&mut report.stages.detect, || {
+            let c = detect::contacts(&self.model, &self.triangles, &self.edges, &start, &pose);
+            self.system.use_contacts(c.repulsions.as_ref());
+            c
+        });
+        let repulsions = contacts.repulsions.as_ref();
+        report.self_contacts = repulsions.map_or(0, |r| r.stencils.len());
+
+        // Newton iterations on v; x = x₀ + h v except at the first linearization point.
+        let n = self.model.particle_count();
+        let mut work = std::mem::take(&mut self.work);
+        work.linearized.resize(n);
+        work.solve.resize(n);
+        work.dv.resize(n, Vec3::ZERO);
+        let (mut x, mut v) = (start.x0.clone(), start.v0.clone());
+        let mut active = ActiveSet::new(contacts.obstacle);
+        let gh = self.model.gravity.length() * h;
+        let newton = self.settings.newton_iterations;
+        let potential = Potential {
+            mass: &self.model.mass,
+            forces: &self.forces,
+            contact: repulsions,
+            x0: &start.x0,
+            v0: &start.v0,
+            h,
+        };
+        for it in 0..newton {
+            timed(&mut report.stages.linearize, || {
+                let iterate = Iterate {
+                    x0: &start.x0,
+                    v0: &start.v0,
+                    x: &x,
+                    v: &v,
+                    h,
+                };
+                let (mass, forces) = (&self.model.mass, &self.forces[..]);
+                linearize::run(
+                    &mut self.system,
+                    mass,
+                    forces,
+                    repulsions,
+                    &iterate,
+                    &mut work.linearized,
+                );
+            });
+            let problem = Problem {
+                pinned: &self.model.pinned,
+                pins: &pose.pins,
+                v: &v,
+                rhs: &work.linearized.rhs,
+                warm: &self.warm_start,
+                iteration: it,
+                sink_tolerance: 1e-2 * gh,
+            };
+            solve::on_active_set(
+                &self.system,
+                &mut self.solvers,
+                &self.settings,
+                &problem,
+                &mut active,
+                &mut work.dv,
+                &mut work.solve,
+                &mut report,
+            )
+            .map_err(|e| at.fail(e))?;
+            report.newton_iterations = it + 1;
+            let outcome = timed(&mut report.stages.update, || {
+                newton::update(&potential, &mut x, &mut v, &work.dv, it, newton, gh)
+            });
+            match outcome {
+                Outcome::Continue => {}
+                Outcome::Converged => break,
+                Outcome::NonFinite(p) => {
+                    let name = guard::particle_name(&self.model, p);
+                    return Err(at.fail(format!("non-finite position or velocity at {name}")));
+                }
+            }
+        }
+        let (held, impulse) = active.held();
+        report.obstacle_contacts = held.len();
+
+        if let Some(c) = &self.model.collision {
+            timed(&mut report.stages.friction, || {
+                friction::run(
+                    &self.model,
+                    c,
+                    repulsions,
+                    &held,
+                    &impulse,
+                    &start.x0,
+                    h,
+                    &mut x,
+                    &mut v,
+                )
+            });
+            report.ccd_hits = timed(&mut report.stages.failsafe, || {
+                failsafe::run(
+                    &self.model,
+                    c,
+                    &self.triangles,
+                    &self.edges,
+                    &pose,
+                    &start.x0,
+                    &mut x,
+                    &mut v,
+                )
+            })
+            .map_err(|e| at.fail(e))?;
+        }
+
+        let t = std::time::Instant::now();
+        let energies = guard::Energies {
+            ke0: start.ke0,
+            surface_speed: pose.surface_speed,
+            h,
+        };
+        if let Some(why) = guard::blow_up(&self.model, &v, &energies, || {
+            potential.stored_energy(&start.x0)
+        }) {
+            return Err(at.fail(why));
+        }
+        for i in 0..n {
+            self.warm_start[i] = v[i] - start.v0[i];
+        }
+        self.model.x = x;
+        self.model.v = v;
+        self.time += h;
+        self.steps += 1;
+        report.stages.commit += t.elapsed().as_secs_f64();
+        self.work = work;
+        report.sum_up(self.model.collision.is_some());
+        Ok(report)
+    }
+
+    /// Gives the multigrid its reference (once, at the first step): the base system matrix
+    /// for step `h` at the state the simulation was created in, filtered by the pins. The
+    /// hierarchy's structure follows that matrix's strong couplings; since it depends only on
+    /// the scene and `h`, a run resumed from a saved state builds the same hierarchy.
+    fn reference(&mut self, h: f64) {
+        if self.settings.preconditioner != Preconditioner::Multigrid
+            || self.solvers.pcg.multigrid().has_reference()
+        {
+            return;
+        }
+        let mut r = self.system.base_pattern();
+        let (x, v) = &self.initial;
+        system::assemble_base(&self.model.mass, &self.forces, x, v, h, &mut r);
+        let pins = crate::constraints::pins::filter(&self.model.pinned);
+        let mg = self.solvers.pcg.multigrid();
+        mg.params.strength = MULTIGRID_STRENGTH;
+        mg.set_reference(r, pins);
+    }
+
+    /// The forces acting on the model.
+    pub fn forces(&self) -> &[Box<dyn Force>] {
+        &self.forces
+    }
+
+    /// The system matrix of the last Newton iteration.
+    pub fn matrix(&self) -> &BlockMatrix {
+        self.system.matrix()
+    }
+
+    /// Total force at the current state.
+    pub fn total_force(&self) -> Vec<Vec3> {
+        let mut f = vec![Vec3::ZERO; self.model.particle_count()];
+        for force in &self.forces {
+            force.add_force(&self.model.x, &self.model.v, &mut f);
+        }
+        f
+    }
+
+    /// Potential energy (springs and gravity) at the current positions.
+    pub fn potential_energy(&self) -> f64 {
+        self.forces.iter().map(|f| f.energy(&self.model.x)).sum()
+    }
+
+    /// Kinetic plus potential energy.
+    pub fn total_energy(&self) -> f64 {
+        self.model.kinetic_energy() + self.potential_energy()
+    }
+
+    /// Assembles the system matrix `M - h D - h² K` at the current state without contacts
+    /// (what the first iteration of a contact-free step solves) into [`Simulation::matrix`];
+    /// for benchmarks and inspection.
+    pub fn assemble_matrix(&mut self, h: f64) {
+        let (x, v) = (&self.model.x, &self.model.v);
+        self.system.use_contacts(None);
+        let at = Linearization {
+            x,
+            v,
+            matrix: (-h * h, -h),
+            // unused: only the matrix is assembled
+            product: (0.0, 0.0),
+            w: v,
+        };
+        self.system
+            .assemble(&self.model.mass, &self.forces, &at, None, None);
+    }
+
+    /// Cloth triangle pairs that intersect and particles inside analytic obstacles, at the
+    /// current state (what `drapery check` counts). A starting state with intersections is
+    /// reported, not repaired.
+    pub fn intersections(&self) -> (usize, usize) {
+        let selfi =
+            crate::collision::check::count_self_intersections(&self.model.x, &self.triangles);
+        let colliders: Vec<_> = self
+            .model
+            .obstacles
+            .iter()
+            .map(|o| o.collider.clone())
+            .collect();
+        let pen =
+            crate::collision::check::count_penetrations(&self.model.x, &colliders, self.time, 0.0);
+        (selfi, pen)
+    }
+}
+
+/// The forces of a model: gravity, then springs and spring damping (the springs with a
+/// nonzero coefficient), then air drag if any particle has it.
+fn model_forces(model: &Model, settings: &SolverSettings) -> Vec<Box<dyn Force>> {
+    let s = &model.springs;
+    let stiff: Vec<usize> = (0..s.len()).filter(|&k| s.stiffness[k] > 0.0).collect();
+    let damped: Vec<usize> = (0..s.len()).filter(|&k| s.damping[k] > 0.0).collect();
+    let mut forces: Vec<Box<dyn Force>> = vec![Box::new(Gravity::new(&model.mass, model.gravity))];
+    if !stiff.is_empty() {
+        forces.push(Box::new(Springs {
+            i: stiff.iter().map(|&k| s.i[k]).collect(),
+            j: stiff.iter().map(|&k| s.j[k]).collect(),
+            rest: stiff.iter().map(|&k| s.rest[k]).collect(),
+            k: stiff.iter().map(|&k| s.stiffness[k]).collect(),
+            clamp_compression: true,
+            sums: PairSums::default(),
+        }));
+    }
+    if !damped.is_empty() {
+        forces.push(Box::new(SpringDamping {
+            i: damped.iter().map(|&k| s.i[k]).collect(),
+            j: damped.iter().map(|&k| s.j[k]).collect(),
+            c: damped.iter().map(|&k| s.damping[k]).collect(),
+            position_jacobian: settings.damping_x_jacobian,
+            sums: PairSums::default(),
+        }));
+    }
+    if model.drag.iter().any(|&c| c > 0.0) {
+        forces.push(Box::new(AirDrag {
+            c: model.drag.clone(),
+        }));
+    }
+    forces
+}
+

@@ -1,0 +1,126 @@
+//! The update of each Newton iteration: the new velocities and positions from the solved
+//! change, with a backtracking line search when the step takes more than one iteration.
+//!
+//! With `newton_iterations > 1` the step minimizes the incremental potential
+//! `Φ(v) = ½ (v - v₀)ᵀ M (v - v₀) + E(x₀ + h v) + h Ψ(x₀ + h v, v)` (`Ψ` the dissipation
+//! potential of damping and drag; docs/MATH.md §1). The first iteration is the linearized step;
+//! each one halves its step along the solved direction until `Φ` does not increase.
+
+use crate::forces::{Force, Repulsions};
+use crate::math::Vec3;
+
+/// What the update found.
+pub(crate) enum Outcome {
+    /// Iterate again (or stop: this was the last iteration).
+    Continue,
+    /// The change was negligible: the iterations have converged.
+    Converged,
+    /// This particle's position or velocity is not finite.
+    NonFinite(usize),
+}
+
+/// The model's forces plus this step's contact force, if any.
+pub(crate) fn all_forces<'a>(
+    forces: &'a [Box<dyn Force>],
+    contact: Option<&'a Repulsions>,
+) -> impl Iterator<Item = &'a dyn Force> {
+    forces
+        .iter()
+        .map(|f| f.as_ref())
+        .chain(contact.map(|c| c as &dyn Force))
+}
+
+/// The forces of a step and where it started.
+pub(crate) struct Potential<'a> {
+    /// Particle masses.
+    pub mass: &'a [f64],
+    /// The model's forces.
+    pub forces: &'a [Box<dyn Force>],
+    /// The step's contact force.
+    pub contact: Option<&'a Repulsions>,
+    /// Start of the step.
+    pub x0: &'a [Vec3],
+    /// Start of the step.
+    pub v0: &'a [Vec3],
+    /// Step, s.
+    pub h: f64,
+}
+
+impl Potential<'_> {
+    /// `Φ(v)` of the module docs.
+    pub fn objective(&self, v: &[Vec3]) -> f64 {
+        let h = self.h;
+        let x: Vec<Vec3> = self.x0.iter().zip(v).map(|(a, b)| *a + h * *b).collect();
+        let inertia: f64 = self
+            .mass
+            .iter()
+            .zip(v.iter().zip(self.v0))
+            .map(|(m, (a, b))| 0.5 * m * (*a - *b).length_squared())
+            .sum();
+        inertia
+            + all_forces(self.forces, self.contact)
+                .map(|f| f.energy(&x) + h * f.dissipation(&x, v))
+                .sum::<f64>()
+    }
+
+    /// Energy stored in the springs and contacts at `x` (every force's potential but
+    /// gravity's, the first force, whose work over a step the blow-up test allows for
+    /// separately).
+    pub fn stored_energy(&self, x: &[Vec3]) -> f64 {
+        all_forces(&self.forces[1..], self.contact)
+            .map(|f| f.energy(x))
+            .sum()
+    }
+}
+
+/// Moves the iterate `(x, v)` by the solved change `dv` (iteration `it` of `newton`), sets
+/// `x = x₀ + h v`, and tells whether to go on. `gh` is `|g| h`, the scale below which a change
+/// counts as negligible.
+pub(crate) fn update(
+    p: &Potential,
+    x: &mut [Vec3],
+    v: &mut Vec<Vec3>,
+    dv: &[Vec3],
+    it: u32,
+    newton: u32,
+    gh: f64,
+) -> Outcome {
+    let n = v.len();
+    let mut alpha = 1.0;
+    if newton > 1 {
+        let start: Vec<Vec3> = if it == 0 {
+            vec![Vec3::ZERO; n]
+        } else {
+            v.clone()
+        };
+        let phi0 = p.objective(&start);
+        let full: Vec<Vec3> = v.iter().zip(dv).map(|(a, b)| *a + *b).collect();
+        let mut cand = full.clone();
+        for _ in 0..20 {
+            if p.objective(&cand) <= phi0 || !phi0.is_finite() {
+                break;
+            }
+            alpha *= 0.5;
+            for i in 0..n {
+                cand[i] = start[i] + alpha * (full[i] - start[i]);
+            }
+        }
+        *v = cand;
+    } else {
+        for i in 0..n {
+            v[i] += dv[i];
+        }
+    }
+    for i in 0..n {
+        x[i] = p.x0[i] + p.h * v[i];
+    }
+    if let Some(i) = super::guard::first_non_finite(x, v) {
+        return Outcome::NonFinite(i);
+    }
+    let vmax = v.iter().fold(0.0f64, |m, e| m.max(e.abs().max_element()));
+    let dmax = dv.iter().fold(0.0f64, |m, e| m.max(e.abs().max_element()));
+    if it + 1 < newton && alpha == 1.0 && dmax <= 1e-12 * vmax.max(gh).max(1e-300) {
+        return Outcome::Converged;
+    }
+    Outcome::Continue
+}

@@ -1,0 +1,73 @@
+//! The time step's tunables, checked once when the simulation is built.
+
+use crate::error::{Error, Result};
+use crate::linalg::pcg::Preconditioner;
+
+/// Which linear solver handles the step's system.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LinearSolver {
+    /// Baraff–Witkin filtered PCG (default), preconditioned as [`SolverSettings::preconditioner`] says.
+    #[default]
+    Pcg,
+    /// Sparse Cholesky (faer) of the filtered system; LU when the matrix is not symmetric.
+    Direct,
+}
+
+/// Tunables of the time step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolverSettings {
+    /// Newton iterations per step; 1 is the seeds' linearized step (default: 1).
+    pub newton_iterations: u32,
+    /// PCG relative residual `‖r‖/‖b‖` (default: 1e-6).
+    pub tolerance: f64,
+    /// PCG iteration cap (default: 1000).
+    pub max_iterations: usize,
+    /// Linear solver (default: PCG).
+    pub linear_solver: LinearSolver,
+    /// Also put the (non-symmetric) position derivative of spring damping in the matrix
+    /// (default: false, as Baraff & Witkin). Needs `linear_solver = Direct`.
+    pub damping_x_jacobian: bool,
+    /// PCG preconditioner (default: the smoothed-aggregation multigrid).
+    pub preconditioner: Preconditioner,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings {
+            newton_iterations: 1,
+            tolerance: 1e-6,
+            max_iterations: 1000,
+            linear_solver: LinearSolver::Pcg,
+            damping_x_jacobian: false,
+            preconditioner: Preconditioner::Multigrid,
+        }
+    }
+}
+
+impl SolverSettings {
+    /// Checks ranges and combinations.
+    pub fn validate(&self) -> Result<()> {
+        if self.newton_iterations < 1 {
+            return Err(Error::Invalid(
+                "solver.newton_iterations must be at least 1".into(),
+            ));
+        }
+        if !(self.tolerance > 0.0 && self.tolerance < 1.0) {
+            return Err(Error::Invalid(format!(
+                "solver.tolerance must be in (0, 1), got {}",
+                self.tolerance
+            )));
+        }
+        if self.max_iterations < 1 {
+            return Err(Error::Invalid(
+                "solver.max_iterations must be at least 1".into(),
+            ));
+        }
+        if self.damping_x_jacobian && self.linear_solver != LinearSolver::Direct {
+            return Err(Error::Invalid(
+                "solver.damping_x_jacobian makes the matrix non-symmetric, which conjugate gradient cannot solve: use linear_solver = \"direct\"".into(),
+            ));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,188 @@
+//! The constrain and solve stages: the filtered linear solve of one Newton iteration, on the
+//! obstacle active set (docs/MATH.md §5).
+//!
+//! Each round sets the constraints (pins, then the held obstacle contacts), solves, and lets
+//! the [`ActiveSet`] release contacts that pull and hold again released ones that sink; at most
+//! [`CONTACT_ROUNDS`] solves per iteration, each from the previous one's solution. Before the
+//! first solve of a step, contacts the initial guess (the previous step's velocity change) says
+//! would pull while their particle leaves the surface anyway are released up front. The last
+//! round keeps the contact set its solve used, so friction gets contacts that match the
+//! velocities they come with.
+
+use super::report::{StepReport, timed};
+use super::settings::{LinearSolver, SolverSettings};
+use super::system::System;
+use crate::constraints::obstacle::ActiveSet;
+use crate::constraints::pins::{self, PinTargets};
+use crate::constraints::Constraints;
+use crate::linalg::direct::DirectSolver;
+use crate::linalg::pcg::{self, PcgScratch, PcgSettings};
+use crate::math::Vec3;
+use rayon::prelude::*;
+
+/// Linear solves per Newton iteration at most.
+pub(crate) const CONTACT_ROUNDS: usize = 2;
+
+/// Particles per task in the per-particle parallel loops.
+const PARTICLES: usize = 1024;
+
+/// The linear solvers' working memory, kept between steps.
+#[derive(Default)]
+pub(crate) struct Solvers {
+    /// PCG and its preconditioner (the multigrid hierarchy lives here).
+    pub pcg: PcgScratch,
+    /// Sparse Cholesky / LU.
+    pub direct: DirectSolver,
+}
+
+/// Everything one iteration's solve reads.
+pub(crate) struct Problem<'a> {
+    /// Pinned particles.
+    pub pinned: &'a [bool],
+    /// Moving pins' targets.
+    pub pins: &'a PinTargets,
+    /// Velocities of the current iterate.
+    pub v: &'a [Vec3],
+    /// Right-hand side.
+    pub rhs: &'a [Vec3],
+    /// Initial guess of the first iteration (the previous step's velocity change).
+    pub warm: &'a [Vec3],
+    /// Newton iteration, from 0.
+    pub iteration: u32,
+    /// A released contact is held again when its solved normal velocity is below the
+    /// prescribed one by more than this, m/s.
+    pub sink_tolerance: f64,
+}
+
+/// Scratch of the solve rounds, kept between steps.
+#[derive(Default)]
+pub(crate) struct Scratch {
+    /// The velocity filter and prescribed changes.
+    pub constraints: Constraints,
+    /// Scratch for the active set's products.
+    pub w: Vec<Vec3>,
+    /// Scratch for the active set's products.
+    pub r: Vec<Vec3>,
+}
+
+impl Scratch {
+    /// Buffers for `n` particles.
+    pub fn resize(&mut self, n: usize) {
+        let c = &mut self.constraints;
+        c.filter.resize(n, crate::math::Mat3::IDENTITY);
+        for b in [&mut c.z, &mut self.w, &mut self.r] {
+            b.resize(n, Vec3::ZERO);
+        }
+    }
+}
+
+/// Solves the iteration's system into `dv` on the active set `set` (see the module docs).
+/// Returns the reason when a linear solve fails.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn on_active_set(
+    system: &System,
+    solvers: &mut Solvers,
+    settings: &SolverSettings,
+    p: &Problem,
+    set: &mut ActiveSet,
+    dv: &mut [Vec3],
+    s: &mut Scratch,
+    report: &mut StepReport,
+) -> Result<(), String> {
+    let Scratch { constraints: c, w, r } = s;
+    let (v, rhs, it) = (p.v, p.rhs, p.iteration);
+    for round in 0..CONTACT_ROUNDS {
+        timed(&mut report.stages.constrain, || {
+            pins::apply(p.pinned, p.pins, v, c);
+            if round == 0 {
+                // initial guess: the previous step's change, then the previous round's
+                // solution (only the contacts that changed differ)
+                dv.par_iter_mut()
+                    .enumerate()
+                    .with_min_len(PARTICLES)
+                    .for_each(|(i, d)| {
+                        *d = if it == 0 {
+                            p.warm.get(i).copied().unwrap_or(Vec3::ZERO)
+                        } else {
+                            Vec3::ZERO
+                        };
+                    });
+            }
+            set.hold(v, c);
+            if round == 0 && it == 0 && !set.is_empty() {
+                set.predict(system.matrix(), rhs, v, dv, c, w, r);
+            }
+        });
+        let t = std::time::Instant::now();
+        report.linear_solves += 1;
+        linear(system, solvers, settings, rhs, c, dv, it, report)?;
+        let mut done = set.is_empty();
+        if !done {
+            set.measure(system.matrix(), rhs, dv, r);
+            done = round + 1 == CONTACT_ROUNDS || !set.update(v, dv, p.sink_tolerance);
+        }
+        report.stages.solve += t.elapsed().as_secs_f64();
+        if done {
+            break;
+        }
+    }
+    Ok(())
+}
+
+/// One linear solve with the constraints `c` into `dv` (its initial guess on entry).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn linear(
+    system: &System,
+    solvers: &mut Solvers,
+    settings: &SolverSettings,
+    rhs: &[Vec3],
+    c: &Constraints,
+    dv: &mut [Vec3],
+    it: u32,
+    report: &mut StepReport,
+) -> Result<(), String> {
+    match settings.linear_solver {
+        LinearSolver::Pcg => {
+            let pcg_settings = PcgSettings {
+                tolerance: settings.tolerance,
+                max_iterations: settings.max_iterations,
+                preconditioner: settings.preconditioner,
+            };
+            let stats = pcg::solve_preconditioned_by(
+                system.matrix(),
+                system.preconditioner(),
+                rhs,
+                &c.filter,
+                &c.z,
+                dv,
+                &pcg_settings,
+                &mut solvers.pcg,
+            );
+            report.cg_iterations += stats.iterations;
+            report.residual = stats.relative_residual;
+            if !stats.converged {
+                let why = if stats.indefinite {
+                    "the system matrix is not positive definite"
+                } else if stats.bad_preconditioner {
+                    "the multigrid preconditioner is not positive definite"
+                } else {
+                    "conjugate gradient did not converge"
+                };
+                return Err(format!(
+                    "{why} (Newton iteration {}, {} CG iterations, relative residual {:.3e}, tolerance {:.1e}); try a smaller dt, a larger solver.max_iterations or linear_solver = \"direct\"",
+                    it + 1,
+                    stats.iterations,
+                    stats.relative_residual,
+                    settings.tolerance
+                ));
+            }
+        }
+        LinearSolver::Direct => {
+            let symmetric = !settings.damping_x_jacobian;
+            solvers
+                .direct
+                .solve(system.matrix(), rhs, &c.filter, &c.z, dv, symmetric)?;
+        }
+    }
+    Ok(())
+}
