@@ -26,7 +26,7 @@ pub mod scene;
 pub mod step;
 
 pub use error::{Error, Result};
-pub use step::{LinearSolver, Simulation, SolverSettings, StageTimes, StepReport};
 pub use math::{Mat3, Vec3};
 pub use mesh::{Face, Mesh};
 pub use model::{ClothDesc, MassSpec, Material, Model};
+pub use step::{LinearSolver, Simulation, SolverSettings, StageTimes, StepReport};

@@ -57,10 +57,10 @@
 use crate::collision::colliders::{Collider, RigidMotion, Shape, TriangleMesh};
 use crate::collision::settings::{CollisionSettings, Obstacle};
 use crate::error::{Error, Result};
-use crate::step::{LinearSolver, Simulation, SolverSettings};
 use crate::math::Vec3;
 use crate::mesh::Mesh;
 use crate::model::{ClothDesc, MassSpec, Material, Model};
+use crate::step::{LinearSolver, Simulation, SolverSettings};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 

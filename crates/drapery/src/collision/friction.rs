@@ -380,4 +380,40 @@ mod tests {
         assert!(w[0].x < 1.0 && w[0].x >= 0.0);
         assert!(w[1..].iter().all(|p| p.x >= 0.0) && w[1..].iter().any(|p| p.x > 0.0));
     }
+
+    proptest! {
+        /// Obstacle friction on a contact moving with its surface: the normal velocity becomes
+        /// the surface's; the tangential speed relative to the surface drops by `μ λ / m` or
+        /// to zero (static), never reverses, and keeps its direction.
+        #[test]
+        fn obstacle_friction_is_coulomb_relative_to_the_moving_surface(
+            slide in prop::array::uniform3(-2.0..2.0f64),
+            surface in prop::array::uniform3(-1.0..1.0f64),
+            lambda in 0.0..0.05f64,
+            mu in 0.0..1.0f64,
+        ) {
+            let n = Vec3::new(0.0, 0.6, 0.8);
+            let surface = Vec3::from_array(surface);
+            let m = 0.01;
+            let ct = ObstacleContact {
+                particle: 0,
+                normal: n,
+                normal_velocity: 0.3,
+                surface_velocity: surface,
+                friction: mu,
+            };
+            let mut v = [Vec3::from_array(slide)];
+            let before = v[0] - surface;
+            let vt0 = before - n * n.dot(before);
+            apply_obstacle_friction(&mut v, &[m], &[ct], &[lambda]);
+            let rel = v[0] - surface;
+            prop_assert!(n.dot(rel).abs() < 1e-12, "normal velocity is the surface's");
+            let vt = rel - n * n.dot(rel);
+            let want = (vt0.length() - mu * lambda / m).max(0.0);
+            prop_assert!((vt.length() - want).abs() < 1e-12, "{} vs {want}", vt.length());
+            if want > 0.0 {
+                prop_assert!(vt.dot(vt0) > 0.0);
+            }
+        }
+    }
 }

@@ -126,7 +126,12 @@ impl ActiveSet {
 
     /// Writes the held contacts into `c` (after the pins), from the current velocities `v`.
     pub fn hold(&self, v: &[Vec3], c: &mut Constraints) {
-        for (ct, _) in self.candidates.iter().zip(&self.active).filter(|(_, a)| **a) {
+        for (ct, _) in self
+            .candidates
+            .iter()
+            .zip(&self.active)
+            .filter(|(_, a)| **a)
+        {
             let i = ct.particle as usize;
             c.hold_normal(i, ct.normal, ct.normal_velocity, v[i]);
         }

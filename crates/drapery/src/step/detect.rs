@@ -64,3 +64,45 @@ pub(crate) fn contacts(
         repulsions,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec3;
+    use crate::step::{pose, testing};
+
+    #[test]
+    fn contacts_need_collisions_on_and_all_pinned_stencils_are_dropped() {
+        let h = 0.01;
+        let start = |m: &Model| Start {
+            x0: m.x.clone(),
+            v0: vec![Vec3::ZERO; m.particle_count()],
+            ke0: 0.0,
+        };
+        // a folded sheet: its two halves 2 mm apart
+        let mut m = testing::sheet_on_ground(4, 0.002);
+        for i in 8..16 {
+            m.x[i] = m.x[i - 8] + Vec3::new(0.0, 0.002, 0.0);
+        }
+        let (tris, edges) = (m.triangles(), m.edges());
+        let pose = pose::at(&m, 0.0, h);
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose);
+        assert!(
+            !c.obstacle.is_empty(),
+            "particles 2 mm above the ground touch it"
+        );
+        let r = c
+            .repulsions
+            .expect("the folded halves are within the thickness");
+        assert!(r.stencils.iter().all(|s| s.dist < 0.005));
+        // pin every particle: no stencil and no obstacle contact is left
+        m.pinned = vec![true; m.particle_count()];
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose);
+        assert!(c.obstacle.is_empty() && c.repulsions.is_none());
+        // collisions off: nothing
+        m.collision = None;
+        m.pinned = vec![false; m.particle_count()];
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose);
+        assert!(c.obstacle.is_empty() && c.repulsions.is_none());
+    }
+}

@@ -47,3 +47,35 @@ pub(crate) fn run(
     }
     Ok(r.ccd_hits)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::constraints::pins::PinTargets;
+    use crate::step::testing;
+
+    #[test]
+    fn a_particle_stopped_at_the_ground_gets_the_velocity_of_its_shortened_path() {
+        let m = testing::sheet_on_ground(3, 0.05);
+        let settings = m.collision.unwrap();
+        let h = 0.01;
+        let pose = Pose {
+            t0: 0.0,
+            h,
+            pins: PinTargets::default(),
+            surface_speed: 0.0,
+        };
+        let x0 = m.x.clone();
+        let mut v = vec![Vec3::new(0.0, -1.0, 0.0); x0.len()];
+        // particle 0 would go 10 cm down, through the ground
+        v[0] = Vec3::new(0.0, -10.0, 0.0);
+        let mut x: Vec<Vec3> = x0.iter().zip(&v).map(|(p, u)| *p + h * *u).collect();
+        let moved_before = x.clone();
+        run(&m, &settings, &[], &[], &pose, &x0, &mut x, &mut v).unwrap();
+        assert!(x[0].y >= 0.0 && x[0].y < x0[0].y, "{}", x[0]);
+        assert_eq!(v[0], (x[0] - x0[0]) / h);
+        // the others were not touched
+        assert_eq!(&x[1..], &moved_before[1..]);
+        assert!(v[1..].iter().all(|u| *u == Vec3::new(0.0, -1.0, 0.0)));
+    }
+}

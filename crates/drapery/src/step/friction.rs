@@ -47,3 +47,41 @@ pub(crate) fn run(
         x[i] += h * ct.normal * ct.normal.dot(solved[i] - v[i]);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::step::testing;
+
+    #[test]
+    fn a_held_particle_keeps_its_solved_normal_displacement_and_ends_at_rest_on_the_surface() {
+        let m = testing::sheet_on_ground(3, 0.003);
+        let settings = m.collision.unwrap();
+        let h = 0.01;
+        let x0 = m.x.clone();
+        // particle 4 held: the solve gave it the normal velocity that brings it to the
+        // thickness, and it slides at 1 m/s; its impulse is large enough for static friction
+        let target = (settings.thickness - x0[4].y) / h;
+        let ct = ObstacleContact {
+            particle: 4,
+            normal: Vec3::Y,
+            normal_velocity: target,
+            surface_velocity: Vec3::ZERO,
+            friction: 0.5,
+        };
+        let mut v = vec![Vec3::ZERO; x0.len()];
+        v[4] = Vec3::new(1.0, target, 0.0);
+        v[3] = Vec3::new(0.2, -0.1, 0.0);
+        let mut x = x0.clone();
+        run(&m, &settings, None, &[ct], &[1.0], &x0, h, &mut x, &mut v);
+        assert!((x[4].y - settings.thickness).abs() < 1e-15, "{}", x[4]);
+        assert_eq!(
+            v[4],
+            Vec3::ZERO,
+            "static friction stops it and the normal speed is the surface's"
+        );
+        assert_eq!(x[4].x, x0[4].x);
+        // a particle without contact just moves
+        assert_eq!(x[3], x0[3] + h * Vec3::new(0.2, -0.1, 0.0));
+    }
+}

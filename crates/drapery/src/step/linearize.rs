@@ -89,3 +89,54 @@ pub(crate) fn run(
         .with_min_len(PARTICLES)
         .for_each(|(i, r)| *r = mass[i] * (v0[i] - v[i]) + h * f[i] + kw[i]);
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::step::{SolverSettings, testing};
+
+    #[test]
+    fn at_the_start_of_the_step_the_right_hand_side_is_h_f_plus_h2_k_v() {
+        let m = testing::sheet(6, 0.5, vec![0, 5]);
+        let forces = super::super::model_forces(&m, &SolverSettings::default());
+        let n = m.particle_count();
+        let h = 0.01;
+        let mut sys = System::new(n, &forces);
+        let mut out = Linearized::default();
+        out.resize(n);
+        let it = Iterate {
+            x0: &m.x,
+            v0: &m.v,
+            x: &m.x,
+            v: &m.v,
+            h,
+        };
+        run(&mut sys, &m.mass, &forces, None, &it, &mut out);
+        // independently: f and K v from the forces' own calls
+        let mut f = vec![Vec3::ZERO; n];
+        let mut kv = vec![Vec3::ZERO; n];
+        for force in &forces {
+            force.add_force(&m.x, &m.v, &mut f);
+            force.add_jacobian_product(&m.x, &m.v, 1.0, 0.0, &m.v, &mut kv);
+        }
+        for i in 0..n {
+            let want = h * (f[i] + h * kv[i]);
+            assert!(
+                (out.rhs[i] - want).length() <= 1e-12 * (1.0 + want.length()),
+                "{i}: {} vs {want}",
+                out.rhs[i]
+            );
+        }
+        // and A = M - h D - h² K: A v = M v - h D v - h² K v
+        let mut av = vec![Vec3::ZERO; n];
+        sys.matrix().mul_vec(&m.v, &mut av);
+        let mut dk = vec![Vec3::ZERO; n];
+        for force in &forces {
+            force.add_jacobian_product(&m.x, &m.v, -h * h, -h, &m.v, &mut dk);
+        }
+        for i in 0..n {
+            let want = m.mass[i] * m.v[i] + dk[i];
+            assert!((av[i] - want).length() <= 1e-12 * (1.0 + want.length()));
+        }
+    }
+}

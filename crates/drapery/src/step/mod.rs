@@ -30,6 +30,8 @@ pub mod report;
 pub mod settings;
 mod solve;
 mod system;
+#[cfg(test)]
+mod testing;
 
 pub use report::{StageTimes, StepReport};
 pub use settings::{LinearSolver, SolverSettings};
@@ -390,4 +392,3 @@ fn model_forces(model: &Model, settings: &SolverSettings) -> Vec<Box<dyn Force>>
     }
     forces
 }
-

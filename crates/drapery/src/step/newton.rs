@@ -124,3 +124,79 @@ pub(crate) fn update(
     }
     Outcome::Continue
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn potential<'a>(x0: &'a [Vec3], v0: &'a [Vec3], mass: &'a [f64]) -> Potential<'a> {
+        Potential {
+            mass,
+            forces: &[],
+            contact: None,
+            x0,
+            v0,
+            h: 0.1,
+        }
+    }
+
+    #[test]
+    fn one_iteration_takes_the_full_change_and_moves_x_by_h_v() {
+        let x0 = [Vec3::ZERO, Vec3::X];
+        let v0 = [Vec3::Y, Vec3::ZERO];
+        let p = potential(&x0, &v0, &[1.0, 2.0]);
+        let (mut x, mut v) = (x0.to_vec(), v0.to_vec());
+        let dv = [Vec3::new(0.5, 0.0, 0.0), Vec3::new(0.0, 0.0, -1.0)];
+        assert!(matches!(
+            update(&p, &mut x, &mut v, &dv, 0, 1, 0.1),
+            Outcome::Continue
+        ));
+        assert_eq!(v, vec![Vec3::new(0.5, 1.0, 0.0), Vec3::new(0.0, 0.0, -1.0)]);
+        for i in 0..2 {
+            assert_eq!(x[i], x0[i] + 0.1 * v[i]);
+        }
+    }
+
+    #[test]
+    fn a_negligible_change_converges_and_a_non_finite_one_is_named() {
+        let x0 = [Vec3::ZERO; 3];
+        let v0 = [Vec3::ZERO; 3];
+        let mass = [1.0; 3];
+        let p = potential(&x0, &v0, &mass);
+        let (mut x, mut v) = (x0.to_vec(), vec![Vec3::X; 3]);
+        // a change of 1e-13 m/s against velocities of 1 m/s, before the last iteration
+        // (toward v₀, so that the line search takes it whole)
+        let tiny = [Vec3::X * -1e-13; 3];
+        assert!(matches!(
+            update(&p, &mut x, &mut v, &tiny, 1, 3, 0.1),
+            Outcome::Converged
+        ));
+        // at the last iteration there is nothing to stop
+        assert!(matches!(
+            update(&p, &mut x, &mut v, &tiny, 2, 3, 0.1),
+            Outcome::Continue
+        ));
+        let mut bad = [Vec3::ZERO; 3];
+        bad[2].y = f64::INFINITY;
+        assert!(matches!(
+            update(&p, &mut x, &mut v, &bad, 1, 3, 0.1),
+            Outcome::NonFinite(2)
+        ));
+    }
+
+    #[test]
+    fn the_line_search_never_increases_the_objective() {
+        // no forces: Φ(v) = ½ Σ m |v - v₀|², minimized at v₀; a change overshooting past
+        // v₀ from zero by a factor 3 is halved until Φ is not above Φ(0)
+        let x0 = [Vec3::ZERO; 2];
+        let v0 = [Vec3::X, Vec3::Y];
+        let mass = [1.0, 1.0];
+        let p = potential(&x0, &v0, &mass);
+        let (mut x, mut v) = (x0.to_vec(), v0.to_vec());
+        let dv = [Vec3::X * 2.0, Vec3::Y * 2.0];
+        let phi0 = p.objective(&[Vec3::ZERO; 2]);
+        update(&p, &mut x, &mut v, &dv, 0, 2, 0.1);
+        assert!(p.objective(&v) <= phi0);
+        assert!(v[0].x < 3.0, "the overshoot is cut back: {}", v[0]);
+    }
+}

@@ -35,3 +35,34 @@ pub(crate) fn at(model: &Model, t0: f64, h: f64) -> Pose {
         surface_speed,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::colliders::{Collider, RigidMotion, Shape};
+    use crate::collision::settings::Obstacle;
+    use crate::math::Vec3;
+    use crate::step::testing;
+
+    #[test]
+    fn the_surface_speed_is_the_fastest_collider_and_fixed_pins_have_no_target() {
+        let mut m = testing::sheet_on_ground(3, 0.5);
+        assert_eq!(at(&m, 0.0, 0.01).surface_speed, 0.0);
+        m.obstacles.push(Obstacle {
+            collider: Collider {
+                shape: Shape::Sphere {
+                    center: Vec3::ZERO,
+                    radius: 0.1,
+                },
+                motion: RigidMotion {
+                    velocity: Vec3::new(3.0, 4.0, 0.0),
+                    angular_velocity: Vec3::ZERO,
+                },
+            },
+            friction: 0.0,
+        });
+        let p = at(&m, 1.5, 0.01);
+        assert_eq!((p.t0, p.h, p.surface_speed), (1.5, 0.01, 5.0));
+        assert!(p.pins.moving.is_empty());
+    }
+}

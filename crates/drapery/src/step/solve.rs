@@ -12,9 +12,9 @@
 use super::report::{StepReport, timed};
 use super::settings::{LinearSolver, SolverSettings};
 use super::system::System;
+use crate::constraints::Constraints;
 use crate::constraints::obstacle::ActiveSet;
 use crate::constraints::pins::{self, PinTargets};
-use crate::constraints::Constraints;
 use crate::linalg::direct::DirectSolver;
 use crate::linalg::pcg::{self, PcgScratch, PcgSettings};
 use crate::math::Vec3;
@@ -89,7 +89,11 @@ pub(crate) fn on_active_set(
     s: &mut Scratch,
     report: &mut StepReport,
 ) -> Result<(), String> {
-    let Scratch { constraints: c, w, r } = s;
+    let Scratch {
+        constraints: c,
+        w,
+        r,
+    } = s;
     let (v, rhs, it) = (p.v, p.rhs, p.iteration);
     for round in 0..CONTACT_ROUNDS {
         timed(&mut report.stages.constrain, || {

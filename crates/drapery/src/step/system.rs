@@ -165,3 +165,88 @@ pub(crate) fn assemble_base(
 fn set_mass(mass: &[f64], m: &mut BlockMatrix) {
     m.set_block_diagonal(|i| Mat3::from_diagonal(Vec3::splat(mass[i])));
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::proximity::{Proximity, StencilKind};
+    use crate::collision::repulsion::Penalty;
+    use crate::step::{SolverSettings, testing};
+
+    /// A repulsion stencil between the corners of the sheet (far apart in the mesh, so its
+    /// pairs are not in the springs' pattern), with the points 1 mm apart.
+    fn contact(x: &mut [Vec3]) -> Repulsions {
+        let (a, b, c, d) = (0u32, 1, 5, 24);
+        x[a as usize] = x[c as usize] + Vec3::new(0.0, 0.001, 0.0);
+        x[b as usize] = x[d as usize] + Vec3::new(0.0, 0.001, 0.0);
+        Repulsions {
+            stencils: vec![Proximity {
+                kind: StencilKind::EdgeEdge,
+                particles: [a, b, c, d],
+                weights: [0.5, 0.5, -0.5, -0.5],
+                dist: 0.001,
+                normal: Vec3::Y,
+            }],
+            penalty: Penalty {
+                thickness: 0.005,
+                stiffness: 1000.0,
+                tangential: false,
+            },
+        }
+    }
+
+    #[test]
+    fn with_contacts_the_system_is_the_base_plus_the_contact_blocks_and_the_preconditioner_their_diagonal()
+     {
+        let mut m = testing::sheet(5, 0.5, vec![]);
+        let r = contact(&mut m.x);
+        let forces = super::super::model_forces(&m, &SolverSettings::default());
+        let h = 0.01;
+        let at = Linearization {
+            x: &m.x,
+            v: &m.v,
+            matrix: (-h * h, -h),
+            product: (0.0, 0.0),
+            w: &m.v,
+        };
+        let mut sys = System::new(m.particle_count(), &forces);
+        sys.assemble(&m.mass, &forces, &at, None, None);
+        let base = sys.matrix().to_dense();
+        assert!(std::ptr::eq(sys.preconditioner(), sys.matrix()));
+        sys.use_contacts(Some(&r));
+        sys.assemble(&m.mass, &forces, &at, Some(&r), None);
+        let mut only = BlockMatrix::from_pairs(m.particle_count(), &{
+            let mut p = Vec::new();
+            r.add_pattern(&mut p);
+            p
+        });
+        r.add_jacobian(&m.x, &m.v, -h * h, -h, &mut only);
+        let only = only.to_dense();
+        let full = sys.matrix().to_dense();
+        let pre = sys.preconditioner().to_dense();
+        let mut coupled = 0;
+        for i in 0..full.len() {
+            for j in 0..full.len() {
+                assert!(
+                    (full[i][j] - (base[i][j] + only[i][j])).abs()
+                        <= 1e-15 * (1.0 + full[i][j].abs())
+                );
+                // the preconditioner keeps the contact's diagonal blocks, not its coupling
+                let same_particle = i / 3 == j / 3;
+                let want = if same_particle {
+                    full[i][j]
+                } else {
+                    base[i][j]
+                };
+                assert_eq!(pre[i][j], want);
+                coupled += (!same_particle && only[i][j] != 0.0) as usize;
+            }
+        }
+        assert!(coupled > 0, "the contact must couple particles");
+        // back to no contacts: the base pattern again, and the same values as before
+        sys.use_contacts(None);
+        sys.assemble(&m.mass, &forces, &at, None, None);
+        assert_eq!(sys.matrix().to_dense(), base);
+        assert!(std::ptr::eq(sys.preconditioner(), sys.matrix()));
+    }
+}

@@ -1,9 +1,9 @@
 use super::*;
-use crate::step::{Simulation, SolverSettings};
 use crate::linalg::direct::DirectSolver;
 use crate::linalg::pcg::{self, PcgScratch, PcgSettings, Preconditioner};
 use crate::math::outer;
 use crate::presets::Preset;
+use crate::step::{Simulation, SolverSettings};
 
 /// The system matrix of a hanging `n × n` cloth (1 m, 0.1 kg, 1000 N/m) after `steps` steps.
 fn cloth_matrix(n: usize, steps: usize) -> BlockMatrix {
