@@ -554,7 +554,7 @@ fn negative_thickness_or_friction_is_refused() {
         &[],
         &[
             "scene.toml",
-            "collision.thickness must be a finite number > 0, got -0.005",
+            "collision.thickness: must be a finite number > 0, got -0.005",
         ],
     );
     assert_rejected(

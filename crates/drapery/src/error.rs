@@ -15,6 +15,16 @@ pub enum Error {
     /// A value given through the library API is out of range or inconsistent.
     #[error("{0}")]
     Invalid(String),
+    /// A field of a scene or model description is out of range or inconsistent. `field` is
+    /// its path in the scene's terms (`cloth[0].stretch_stiffness`, `solver.tolerance`), which
+    /// each front end words: the TOML loader adds the file and the line.
+    #[error("{field}: {message}")]
+    Field {
+        /// Path of the field at fault, `table[index].key` or `table.key`.
+        field: String,
+        /// What is wrong with it (`must be a finite number ≥ 0, got -1`).
+        message: String,
+    },
     /// A time step failed: non-finite state, a solver that did not converge, or an energy blow-up.
     #[error("simulation failed at step {step} (t = {time:.6} s): {reason}")]
     StepFailed {
@@ -42,6 +52,13 @@ impl Error {
     pub fn input(path: impl std::fmt::Display, message: impl Into<String>) -> Self {
         Error::Input {
             path: path.to_string(),
+            message: message.into(),
+        }
+    }
+    /// Shorthand for an [`Error::Field`].
+    pub fn field(field: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::Field {
+            field: field.into(),
             message: message.into(),
         }
     }

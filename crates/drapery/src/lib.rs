@@ -24,6 +24,7 @@ pub mod presets;
 pub mod render;
 pub mod scene;
 pub mod step;
+pub mod validate;
 
 pub use error::{Error, Result};
 pub use math::{Mat3, Vec3};

@@ -6,6 +6,7 @@
 use crate::error::{Error, Result};
 use crate::math::{Mat3, Vec3};
 use crate::mesh::Mesh;
+use crate::validate;
 
 /// How particle masses are given.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -164,22 +165,11 @@ pub struct Model {
     pub obstacles: Vec<crate::collision::settings::Obstacle>,
 }
 
-fn check_nonneg(cloth: &str, field: &str, v: f64) -> Result<()> {
-    if !(v >= 0.0 && v.is_finite()) {
-        return Err(Error::Invalid(format!(
-            "cloth '{cloth}': {field} must be a finite number ≥ 0, got {v}"
-        )));
-    }
-    Ok(())
-}
-
 impl Model {
     /// Builds the model: validates every cloth, generates springs (stretch, shear, bend; a
     /// spring with zero stiffness and zero damping is left out), lumps masses and applies pins.
     pub fn new(cloths: Vec<ClothDesc>, gravity: Vec3) -> Result<Model> {
-        if !gravity.is_finite() {
-            return Err(Error::Invalid("gravity must be finite".into()));
-        }
+        validate::finite3("simulation.gravity", gravity)?;
         let mut m = Model {
             x: Vec::new(),
             v: Vec::new(),
@@ -196,8 +186,9 @@ impl Model {
             m.add_cloth(c)?;
         }
         if m.x.is_empty() {
-            return Err(Error::Invalid(
-                "the model has no particles (no cloth given)".into(),
+            return Err(Error::field(
+                "cloth",
+                "the model has no particles (no cloth given)",
             ));
         }
         Ok(m)
@@ -205,48 +196,45 @@ impl Model {
 
     fn add_cloth(&mut self, c: ClothDesc) -> Result<()> {
         let name = c.name.as_str();
+        let at = format!("cloth[{}]", self.cloths.len());
+        let field = |key: &str| format!("{at}.{key}");
         if name.is_empty() || name.chars().any(|ch| ch.is_whitespace()) {
-            return Err(Error::Invalid(format!(
-                "cloth name '{name}' must be non-empty and contain no white space"
-            )));
+            return Err(Error::field(
+                field("name"),
+                format!("'{name}' must be non-empty and contain no white space"),
+            ));
         }
-        if self.cloths.iter().any(|o| o.name == name) {
-            return Err(Error::Invalid(format!("two cloths are named '{name}'")));
+        if let Some(j) = self.cloths.iter().position(|o| o.name == name) {
+            return Err(Error::field(
+                field("name"),
+                format!("'{name}' is already used by cloth[{j}]"),
+            ));
         }
         c.mesh.validate(&format!("cloth '{name}' mesh"))?;
         let mat = &c.material;
-        check_nonneg(name, "stretch_stiffness", mat.stretch_stiffness)?;
-        check_nonneg(name, "shear_stiffness", mat.shear_stiffness)?;
-        check_nonneg(name, "bend_stiffness", mat.bend_stiffness)?;
-        check_nonneg(name, "damping", mat.damping)?;
-        check_nonneg(name, "air_drag", mat.air_drag)?;
-        if !c.initial_velocity.is_finite() {
-            return Err(Error::Invalid(format!(
-                "cloth '{name}': initial_velocity must be finite"
-            )));
-        }
+        validate::nonneg(&field("stretch_stiffness"), mat.stretch_stiffness)?;
+        validate::nonneg(&field("shear_stiffness"), mat.shear_stiffness)?;
+        validate::nonneg(&field("bend_stiffness"), mat.bend_stiffness)?;
+        validate::nonneg(&field("damping"), mat.damping)?;
+        validate::nonneg(&field("air_drag"), mat.air_drag)?;
+        validate::finite3(&field("initial_velocity"), c.initial_velocity)?;
         let n = c.mesh.positions.len();
         let masses: Vec<f64> = match mat.mass {
             MassSpec::PerVertex(mv) => {
-                if !(mv > 0.0 && mv.is_finite()) {
-                    return Err(Error::Invalid(format!(
-                        "cloth '{name}': vertex_mass must be a finite number > 0, got {mv}"
-                    )));
-                }
+                validate::positive(&field("vertex_mass"), mv)?;
                 vec![mv; n]
             }
             MassSpec::Density(rho) => {
-                if !(rho > 0.0 && rho.is_finite()) {
-                    return Err(Error::Invalid(format!(
-                        "cloth '{name}': density must be a finite number > 0, got {rho}"
-                    )));
-                }
+                validate::positive(&field("density"), rho)?;
                 let areas = c.mesh.vertex_areas();
                 if let Some(i) = areas.iter().position(|&a| a <= 0.0) {
-                    return Err(Error::Invalid(format!(
-                        "cloth '{name}': vertex {} belongs to no face, so density gives it no mass; use vertex_mass",
-                        i + 1
-                    )));
+                    return Err(Error::field(
+                        field("density"),
+                        format!(
+                            "vertex {} of cloth '{name}' belongs to no face, so density gives it no mass; use vertex_mass",
+                            i + 1
+                        ),
+                    ));
                 }
                 areas.iter().map(|a| a * rho).collect()
             }
@@ -255,9 +243,13 @@ impl Model {
         let mut pinned = vec![false; n];
         for &p in &c.pins {
             if p as usize >= n {
-                return Err(Error::Invalid(format!(
-                    "cloth '{name}': pin {p} is out of range (the mesh has {n} vertices, 0-based)"
-                )));
+                return Err(Error::field(
+                    field("pin"),
+                    format!(
+                        "{p} is out of range: the mesh of cloth '{name}' has {n} vertices, numbered 0 to {} (0-based)",
+                        n.saturating_sub(1)
+                    ),
+                ));
             }
             pinned[p as usize] = true;
         }
@@ -291,11 +283,14 @@ impl Model {
             &mut self.springs,
         );
         if let Some(bad) = (0..self.springs.len()).find(|&s| !(self.springs.rest[s] > 0.0)) {
-            return Err(Error::Invalid(format!(
-                "cloth '{name}': spring between vertices {} and {} has zero rest length (coincident vertices)",
-                self.springs.i[bad] - o,
-                self.springs.j[bad] - o
-            )));
+            return Err(Error::field(
+                field("mesh"),
+                format!(
+                    "spring between vertices {} and {} of cloth '{name}' has zero rest length (coincident vertices)",
+                    self.springs.i[bad] - o,
+                    self.springs.j[bad] - o
+                ),
+            ));
         }
         self.x.extend_from_slice(pos);
         self.v.extend(std::iter::repeat_n(c.initial_velocity, n));
@@ -360,10 +355,7 @@ impl Model {
     /// The velocity filter of the pins alone (MATH.md §5): `0` for a pinned particle, `I`
     /// otherwise.
     pub fn pin_filter(&self) -> Vec<Mat3> {
-        self.pinned
-            .iter()
-            .map(|&p| if p { Mat3::ZERO } else { Mat3::IDENTITY })
-            .collect()
+        crate::constraints::pins::filter(&self.pinned)
     }
 
     /// Total mass, kg.
@@ -432,7 +424,7 @@ mod tests {
             Model::new(vec![c], Vec3::ZERO)
                 .unwrap_err()
                 .to_string()
-                .contains("pin 20")
+                .contains("cloth[0].pin: 20 is out of range")
         );
         let c = grid_cloth(MassSpec::PerVertex(f64::NAN));
         assert!(

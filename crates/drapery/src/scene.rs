@@ -151,9 +151,9 @@ struct SimulationTable {
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct SolverTable {
-    newton_iterations: Option<i64>,
+    newton_iterations: Option<u32>,
     tolerance: Option<f64>,
-    max_iterations: Option<i64>,
+    max_iterations: Option<usize>,
     linear_solver: Option<SolverName>,
     damping_x_jacobian: Option<bool>,
 }
@@ -179,7 +179,7 @@ struct ClothTable {
     damping: Option<f64>,
     air_drag: Option<f64>,
     #[serde(default)]
-    pin: Vec<i64>,
+    pin: Vec<u32>,
     initial_velocity: Option<[f64; 3]>,
 }
 
@@ -309,8 +309,7 @@ impl Scene {
         let duration = positive(s, "duration", sim.duration).map_err(file_err)?;
         let dt = positive(s, "dt", sim.dt).map_err(file_err)?;
         let frame_rate = positive(s, "frame_rate", sim.frame_rate).map_err(file_err)?;
-        let gravity =
-            finite3(s, "gravity", sim.gravity.unwrap_or(DEFAULT_GRAVITY)).map_err(file_err)?;
+        let gravity = Vec3::from_array(sim.gravity.unwrap_or(DEFAULT_GRAVITY));
         let steps = 1.0 / (frame_rate * dt);
         if whole(steps).is_none() {
             return Err(file_err(format!(
@@ -325,7 +324,11 @@ impl Scene {
             )));
         }
 
-        let solver = solver_settings(&file.solver).map_err(file_err)?;
+        // The loader parses; the settings and the model validate themselves (one validator
+        // per fact), and their errors are worded here with the file and the line.
+        let located = |e: Error| locate(e, text, path);
+        let solver = solver_settings(&file.solver);
+        solver.validate().map_err(located)?;
 
         if file.cloth.is_empty() {
             return Err(file_err(
@@ -336,16 +339,6 @@ impl Scene {
         let mut cloths: Vec<ClothDesc> = Vec::with_capacity(file.cloth.len());
         for (i, c) in file.cloth.iter().enumerate() {
             let what = format!("cloth[{i}] '{}': ", c.name);
-            if c.name.is_empty() || c.name.chars().any(|ch| ch.is_whitespace()) {
-                return Err(file_err(format!(
-                    "{what}name must be non-empty and contain no white space"
-                )));
-            }
-            if let Some(j) = cloths.iter().position(|o| o.name == c.name) {
-                return Err(file_err(format!(
-                    "{what}name is already used by cloth[{j}]"
-                )));
-            }
             let mesh = match (&c.mesh, &c.grid) {
                 (Some(m), None) => {
                     let mesh_path = dir.join(m);
@@ -370,12 +363,8 @@ impl Scene {
                 }
             };
             let mass = match (c.vertex_mass, c.density) {
-                (Some(m), None) => {
-                    MassSpec::PerVertex(positive(&what, "vertex_mass", m).map_err(file_err)?)
-                }
-                (None, Some(d)) => {
-                    MassSpec::Density(positive(&what, "density", d).map_err(file_err)?)
-                }
+                (Some(m), None) => MassSpec::PerVertex(m),
+                (None, Some(d)) => MassSpec::Density(d),
                 (Some(_), Some(_)) => {
                     return Err(file_err(format!(
                         "{what}give either vertex_mass or density, not both"
@@ -388,52 +377,26 @@ impl Scene {
                 }
             };
             let d = Material::default();
-            let field = |name: &str, v: Option<f64>, default: f64| {
-                nonneg(&what, name, v.unwrap_or(default)).map_err(file_err)
-            };
             let material = Material {
-                stretch_stiffness: field(
-                    "stretch_stiffness",
-                    c.stretch_stiffness,
-                    d.stretch_stiffness,
-                )?,
-                shear_stiffness: field("shear_stiffness", c.shear_stiffness, d.shear_stiffness)?,
-                bend_stiffness: field("bend_stiffness", c.bend_stiffness, d.bend_stiffness)?,
-                damping: field("damping", c.damping, d.damping)?,
-                air_drag: field("air_drag", c.air_drag, d.air_drag)?,
+                stretch_stiffness: c.stretch_stiffness.unwrap_or(d.stretch_stiffness),
+                shear_stiffness: c.shear_stiffness.unwrap_or(d.shear_stiffness),
+                bend_stiffness: c.bend_stiffness.unwrap_or(d.bend_stiffness),
+                damping: c.damping.unwrap_or(d.damping),
+                air_drag: c.air_drag.unwrap_or(d.air_drag),
                 mass,
             };
-            let n = mesh.vertex_count();
-            let mut pins = Vec::with_capacity(c.pin.len());
-            for &p in &c.pin {
-                match u32::try_from(p) {
-                    Ok(q) if (q as usize) < n => pins.push(q),
-                    _ => {
-                        return Err(file_err(format!(
-                            "{what}pin {p} is out of range: the mesh has {n} vertices, numbered 0 to {} (0-based)",
-                            n.saturating_sub(1)
-                        )));
-                    }
-                }
-            }
-            let initial_velocity = finite3(
-                &what,
-                "initial_velocity",
-                c.initial_velocity.unwrap_or([0.0; 3]),
-            )
-            .map_err(file_err)?;
             cloths.push(ClothDesc {
                 name: c.name.clone(),
                 mesh,
                 material,
-                pins,
-                initial_velocity,
+                pins: c.pin.clone(),
+                initial_velocity: Vec3::from_array(c.initial_velocity.unwrap_or([0.0; 3])),
             });
         }
-        let mut collision = match &file.collision {
-            Some(t) => Some(collision_settings(t).map_err(file_err)?),
-            None => None,
-        };
+        let mut collision = file.collision.as_ref().map(collision_settings);
+        if let Some(c) = &collision {
+            c.validate().map_err(located)?;
+        }
         let mut obstacles = Vec::with_capacity(file.collider.len());
         let default_friction = collision.unwrap_or_default().friction;
         for (i, c) in file.collider.iter().enumerate() {
@@ -453,9 +416,9 @@ impl Scene {
             collision,
             obstacles,
         };
-        // Whatever the model itself rejects (e.g. density on vertices that belong to no face)
-        // is reported now, before anything is simulated or written.
-        scene.model()?;
+        // Whatever the model itself rejects (cloth names, materials, pins, density on vertices
+        // that belong to no face) is reported now, before anything is simulated or written.
+        scene.unchecked_model().map_err(located)?;
         Ok(scene)
     }
 
@@ -483,7 +446,12 @@ impl Scene {
 
     /// Builds the model of the scene. Model errors are reported against the scene file.
     pub fn model(&self) -> Result<Model> {
-        let mut m = Model::new(self.cloths.clone(), self.gravity).map_err(|e| self.blame(e))?;
+        self.unchecked_model().map_err(|e| self.blame(e))
+    }
+
+    /// The model, with the model's own errors.
+    fn unchecked_model(&self) -> Result<Model> {
+        let mut m = Model::new(self.cloths.clone(), self.gravity)?;
         m.collision = self.collision;
         m.obstacles = self.obstacles.clone();
         Ok(m)
@@ -498,54 +466,91 @@ impl Scene {
     fn blame(&self, e: Error) -> Error {
         match e {
             Error::Invalid(m) => Error::input(self.path.display(), m),
+            e @ Error::Field { .. } => Error::input(self.path.display(), e.to_string()),
             other => other,
         }
     }
 }
 
-fn solver_settings(t: &SolverTable) -> std::result::Result<SolverSettings, String> {
+fn solver_settings(t: &SolverTable) -> SolverSettings {
     let d = SolverSettings::default();
-    let newton_iterations = match t.newton_iterations {
-        None => d.newton_iterations,
-        Some(n) => u32::try_from(n).ok().filter(|&n| n >= 1).ok_or_else(|| {
-            format!("solver.newton_iterations must be a whole number ≥ 1, got {n}")
-        })?,
-    };
-    let tolerance = match t.tolerance {
-        None => d.tolerance,
-        Some(v) => positive("solver.", "tolerance", v)?,
-    };
-    let max_iterations = match t.max_iterations {
-        None => d.max_iterations,
-        Some(n) => usize::try_from(n)
-            .ok()
-            .filter(|&n| n >= 1)
-            .ok_or_else(|| format!("solver.max_iterations must be a whole number ≥ 1, got {n}"))?,
-    };
-    let linear_solver = match t.linear_solver {
-        None => d.linear_solver,
-        Some(SolverName::Pcg) => LinearSolver::Pcg,
-        Some(SolverName::Direct) => LinearSolver::Direct,
-    };
-    Ok(SolverSettings {
-        newton_iterations,
-        tolerance,
-        max_iterations,
-        linear_solver,
+    SolverSettings {
+        newton_iterations: t.newton_iterations.unwrap_or(d.newton_iterations),
+        tolerance: t.tolerance.unwrap_or(d.tolerance),
+        max_iterations: t.max_iterations.unwrap_or(d.max_iterations),
+        linear_solver: match t.linear_solver {
+            None => d.linear_solver,
+            Some(SolverName::Pcg) => LinearSolver::Pcg,
+            Some(SolverName::Direct) => LinearSolver::Direct,
+        },
         damping_x_jacobian: t.damping_x_jacobian.unwrap_or(d.damping_x_jacobian),
         ..d
-    })
+    }
 }
 
-fn collision_settings(t: &CollisionTable) -> std::result::Result<CollisionSettings, String> {
+fn collision_settings(t: &CollisionTable) -> CollisionSettings {
     let d = CollisionSettings::default();
-    let c = "collision.";
-    Ok(CollisionSettings {
-        thickness: positive(c, "thickness", t.thickness.unwrap_or(d.thickness))?,
+    CollisionSettings {
+        thickness: t.thickness.unwrap_or(d.thickness),
         self_collision: t.self_collision.unwrap_or(d.self_collision),
-        friction: nonneg(c, "friction", t.friction.unwrap_or(d.friction))?,
-        stiffness: positive(c, "stiffness", t.stiffness.unwrap_or(d.stiffness))?,
-    })
+        friction: t.friction.unwrap_or(d.friction),
+        stiffness: t.stiffness.unwrap_or(d.stiffness),
+    }
+}
+
+/// Words a library error about a field ([`Error::Field`]) for the scene file: its path and,
+/// when the field (or its table) can be found in `text`, the line: `s.toml: line 12,
+/// cloth[0].damping: must be ...`.
+fn locate(e: Error, text: &str, path: &Path) -> Error {
+    match e {
+        Error::Field { field, message } => {
+            let at = match field_line(text, &field) {
+                Some(line) => format!("line {line}, "),
+                None => String::new(),
+            };
+            Error::input(path.display(), format!("{at}{field}: {message}"))
+        }
+        Error::Invalid(m) => Error::input(path.display(), m),
+        other => other,
+    }
+}
+
+/// The 1-based line of `field` (`table.key`, `table[i].key`, `table[i]`) in scene `text`: the
+/// key's line inside its table, or the table's header when the key is not written (a default).
+fn field_line(text: &str, field: &str) -> Option<usize> {
+    let (table, key) = match field.split_once('.') {
+        Some((t, k)) => (t, Some(k.split(['.', '[']).next().unwrap_or(k))),
+        None => (field, None),
+    };
+    let (name, index) = match table.split_once('[') {
+        Some((n, i)) => (n, Some(i.trim_end_matches(']').parse::<usize>().ok()?)),
+        None => (table, None),
+    };
+    let header = match index {
+        Some(_) => format!("[[{name}]]"),
+        None => format!("[{name}]"),
+    };
+    let lines: Vec<&str> = text.lines().collect();
+    let starts: Vec<usize> = lines
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l.split('#').next().unwrap_or("").trim() == header)
+        .map(|(i, _)| i)
+        .collect();
+    let start = *starts.get(index.unwrap_or(0))?;
+    let Some(key) = key else {
+        return Some(start + 1);
+    };
+    for (i, l) in lines.iter().enumerate().skip(start + 1) {
+        let l = l.trim();
+        if l.starts_with('[') {
+            break;
+        }
+        if l.split_once('=').is_some_and(|(k, _)| k.trim() == key) {
+            return Some(i + 1);
+        }
+    }
+    Some(start + 1)
 }
 
 /// Shape names of `[[collider]]`.
@@ -791,11 +796,11 @@ pin = [0, 2]
             ),
             (
                 BASE.replace("pin = [0, 2]", "pin = [0, 12]"),
-                "cloth[0] 'sheet': pin 12 is out of range",
+                "line 11, cloth[0].pin: 12 is out of range",
             ),
             (
                 BASE.replace("pin = [0, 2]", "stretch_stiffness = -1"),
-                "cloth[0] 'sheet': stretch_stiffness must be a finite number ≥ 0, got -1",
+                "line 11, cloth[0].stretch_stiffness: must be a finite number ≥ 0, got -1",
             ),
             (
                 BASE.replace("vertex_mass = 0.01", "vertex_mass = -0.01"),
@@ -838,7 +843,11 @@ pin = [0, 2]
             );
         }
         let two = format!("{BASE}{}", &BASE[BASE.find("[[cloth]]").unwrap()..]);
-        assert!(err(&two).contains("cloth[1] 'sheet': name is already used by cloth[0]"));
+        let e = err(&two);
+        assert!(
+            e.contains("cloth[1].name: 'sheet' is already used by cloth[0]"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -905,8 +914,8 @@ pin = [0, 2]
     fn bad_collision_values_are_named() {
         let sphere = "[[collider]]\nshape = \"sphere\"\ncenter = [0, 1, 0]\nradius = 0.5\n";
         let cases = [
-            ("[collision]\nthickness = -1\n".to_string(), "collision.thickness must be a finite number > 0, got -1"),
-            ("[collision]\nfriction = nan\n".to_string(), "collision.friction must be a finite number ≥ 0, got NaN"),
+            ("[collision]\nthickness = -1\n".to_string(), "collision.thickness: must be a finite number > 0, got -1"),
+            ("[collision]\nfriction = nan\n".to_string(), "collision.friction: must be a finite number ≥ 0, got NaN"),
             ("[collision]\nstiffness = 0\n".to_string(), "collision.stiffness"),
             ("[collision]\nthicknes = 1\n".to_string(), "unknown field `thicknes`"),
             (sphere.replace("0.5", "-0.5"), "collider[0] (sphere): radius must be a finite number > 0, got -0.5"),
@@ -931,5 +940,26 @@ pin = [0, 2]
                 "{e:?} lacks {want:?}"
             );
         }
+    }
+
+    #[test]
+    fn a_field_error_names_the_line_of_its_key_or_of_its_table() {
+        let text =
+            format!("{BASE}\n[[cloth]]\nname = \"b\"\ndamping = 2\n\n[solver]\ntolerance = 3\n");
+        assert_eq!(field_line(&text, "cloth[0].pin"), Some(11));
+        assert_eq!(field_line(&text, "cloth[1].damping"), Some(15));
+        // not written: the default was used, the table's header is named
+        assert_eq!(field_line(&text, "cloth[1].air_drag"), Some(13));
+        assert_eq!(field_line(&text, "solver.tolerance"), Some(18));
+        assert_eq!(field_line(&text, "collision.thickness"), None);
+        assert_eq!(field_line(&text, "cloth[2].name"), None);
+        let e = err(&BASE.replace("pin = [0, 2]", "damping = -3"));
+        assert_eq!(
+            e,
+            "dir/s.toml: line 11, cloth[0].damping: must be a finite number ≥ 0, got -3"
+        );
+        let e = err(&format!("{BASE}\n[simulation.x]\n")
+            .replace("frame_rate = 25", "frame_rate = 25\ngravity = [0, nan, 0]"));
+        assert!(e.contains("simulation"), "{e}");
     }
 }

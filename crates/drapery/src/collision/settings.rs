@@ -2,7 +2,8 @@
 //! and the obstacles.
 
 use super::colliders::Collider;
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::validate;
 
 /// Collision parameters shared by every contact.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,24 +33,9 @@ impl Default for CollisionSettings {
 impl CollisionSettings {
     /// Checks the ranges.
     pub fn validate(&self) -> Result<()> {
-        if !(self.thickness > 0.0 && self.thickness.is_finite()) {
-            return Err(Error::Invalid(format!(
-                "collision.thickness must be a finite number > 0, got {}",
-                self.thickness
-            )));
-        }
-        if !(self.friction >= 0.0 && self.friction.is_finite()) {
-            return Err(Error::Invalid(format!(
-                "collision.friction must be a finite number ≥ 0, got {}",
-                self.friction
-            )));
-        }
-        if !(self.stiffness > 0.0 && self.stiffness.is_finite()) {
-            return Err(Error::Invalid(format!(
-                "collision.stiffness must be a finite number > 0, got {}",
-                self.stiffness
-            )));
-        }
+        validate::positive("collision.thickness", self.thickness)?;
+        validate::nonneg("collision.friction", self.friction)?;
+        validate::positive("collision.stiffness", self.stiffness)?;
         Ok(())
     }
 }

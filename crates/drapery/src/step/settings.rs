@@ -48,24 +48,27 @@ impl SolverSettings {
     /// Checks ranges and combinations.
     pub fn validate(&self) -> Result<()> {
         if self.newton_iterations < 1 {
-            return Err(Error::Invalid(
-                "solver.newton_iterations must be at least 1".into(),
+            return Err(Error::field(
+                "solver.newton_iterations",
+                format!("must be at least 1, got {}", self.newton_iterations),
             ));
         }
         if !(self.tolerance > 0.0 && self.tolerance < 1.0) {
-            return Err(Error::Invalid(format!(
-                "solver.tolerance must be in (0, 1), got {}",
-                self.tolerance
-            )));
+            return Err(Error::field(
+                "solver.tolerance",
+                format!("must be in (0, 1), got {}", self.tolerance),
+            ));
         }
         if self.max_iterations < 1 {
-            return Err(Error::Invalid(
-                "solver.max_iterations must be at least 1".into(),
+            return Err(Error::field(
+                "solver.max_iterations",
+                format!("must be at least 1, got {}", self.max_iterations),
             ));
         }
         if self.damping_x_jacobian && self.linear_solver != LinearSolver::Direct {
-            return Err(Error::Invalid(
-                "solver.damping_x_jacobian makes the matrix non-symmetric, which conjugate gradient cannot solve: use linear_solver = \"direct\"".into(),
+            return Err(Error::field(
+                "solver.damping_x_jacobian",
+                "makes the matrix non-symmetric, which conjugate gradient cannot solve: use linear_solver = \"direct\"",
             ));
         }
         Ok(())
