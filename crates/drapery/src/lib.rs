@@ -13,6 +13,7 @@
 
 pub mod collision;
 pub mod error;
+pub mod fingerprint;
 pub mod forces;
 pub mod integrator;
 pub mod io;
@@ -23,6 +24,8 @@ pub mod model;
 pub mod presets;
 pub mod render;
 pub mod scene;
+pub mod snapshot;
+pub mod stats;
 
 pub use error::{Error, Result};
 pub use integrator::{LinearSolver, Simulation, SolverSettings, StepReport};
