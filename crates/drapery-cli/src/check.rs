@@ -8,11 +8,12 @@
 //! One line per frame with a problem, then a summary line; exit code 0 when every frame is
 //! clean, 1 when anything intersects (or on an error).
 
-use crate::render::{frame_files, read_frame};
+use crate::render::frame_files;
 use anyhow::{Result, bail};
 use clap::Args;
 use drapery::collision::colliders::Collider;
 use drapery::collision::frame_check::{FrameCheck, check_frame};
+use drapery::io::frames::read_frame;
 use drapery::scene::Scene;
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -55,7 +56,7 @@ pub fn check(args: CheckArgs) -> Result<bool> {
     let results: Vec<(usize, FrameCheck)> = frames
         .par_iter()
         .map(|&(k, path)| -> Result<(usize, FrameCheck)> {
-            let mesh = read_frame(path, kind)?;
+            let mesh = read_frame(path)?;
             let (t, n_scene) = match &scene {
                 Some(s) => (
                     k as f64 / s.frame_rate,

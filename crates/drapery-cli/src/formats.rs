@@ -9,6 +9,7 @@
 use clap::ValueEnum;
 use drapery::Vec3;
 use drapery::collision::settings::Obstacle;
+use drapery::io::frames::frame_path;
 use drapery::io::gltf::{StaticMesh, write_glb_with};
 use drapery::io::obj::ObjWriter;
 use drapery::io::ply::write_ply;
@@ -125,11 +126,6 @@ impl FrameWriter for WholeRun {
             _ => write_usda(&self.path, cloths, frames, self.frame_rate),
         }
     }
-}
-
-/// `DIR/frame_00007.EXT`.
-pub fn frame_path(dir: &Path, k: usize, ext: &str) -> PathBuf {
-    dir.join(format!("frame_{k:05}.{ext}"))
 }
 
 /// The writer of one format.

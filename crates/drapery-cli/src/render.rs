@@ -9,9 +9,7 @@
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use drapery::Vec3;
-use drapery::io::obj::read_obj;
-use drapery::io::ply::read_ply;
-use drapery::mesh::{Face, Mesh};
+use drapery::io::frames::{find_frames, read_frame};
 use drapery::model::ClothInfo;
 use drapery::render::{
     AUTO_FOV_Y_DEG, Camera, RenderScene, auto_camera, render, write_gif, write_png,
@@ -100,82 +98,25 @@ fn parse_vec3(opt: &str, s: &str) -> Result<Vec3> {
     Ok(Vec3::new(v[0], v[1], v[2]))
 }
 
-/// The frame files of a run folder by frame number: OBJ frames, or PLY frames if there is none.
+/// The frame files of a run folder by frame number: OBJ frames, or PLY frames if there is none
+/// ([`find_frames`]), and their extension; an error when there is no frame.
 pub fn frame_files(dir: &Path) -> Result<(BTreeMap<usize, PathBuf>, &'static str)> {
-    let rd = std::fs::read_dir(dir)
-        .with_context(|| format!("{}: cannot read the frame folder", dir.display()))?;
-    let mut obj = BTreeMap::new();
-    let mut ply = BTreeMap::new();
-    for e in rd {
-        let e = e.with_context(|| format!("{}: cannot read the frame folder", dir.display()))?;
-        let name = e.file_name().to_string_lossy().into_owned();
-        let Some(rest) = name.strip_prefix("frame_") else {
-            continue;
-        };
-        let Some((num, ext)) = rest.split_once('.') else {
-            continue;
-        };
-        if num.is_empty() || !num.bytes().all(|b| b.is_ascii_digit()) {
-            continue;
-        }
-        let Ok(k) = num.parse::<usize>() else {
-            continue;
-        };
-        match ext {
-            "obj" => obj.insert(k, e.path()),
-            "ply" => ply.insert(k, e.path()),
-            _ => None,
-        };
-    }
-    if !obj.is_empty() {
-        Ok((obj, "obj"))
-    } else if !ply.is_empty() {
-        Ok((ply, "ply"))
-    } else {
-        bail!(
+    match find_frames(dir) {
+        Ok(Some(f)) => Ok((f.files, f.ext)),
+        Ok(None) => bail!(
             "{}: no frames to render (no frame_*.obj or frame_*.ply files)",
             dir.display()
-        )
+        ),
+        Err(drapery::Error::Io { cause, .. }) => {
+            Err(cause).with_context(|| format!("{}: cannot read the frame folder", dir.display()))
+        }
+        Err(e) => Err(e.into()),
     }
-}
-
-/// One frame file as one mesh (all cloths together; OBJ objects are merged, PLY polygons with
-/// more than four vertices are fanned into triangles).
-pub fn read_frame(path: &Path, ext: &str) -> Result<Mesh> {
-    Ok(if ext == "obj" {
-        read_obj(path)?
-    } else {
-        let (positions, polys) = read_ply(path)?;
-        let mut faces = Vec::with_capacity(polys.len());
-        for p in polys {
-            match p[..] {
-                [a, b, c] => faces.push(Face::Tri([a, b, c])),
-                [a, b, c, d] => faces.push(Face::Quad([a, b, c, d])),
-                _ if p.len() > 4 => {
-                    faces.extend((1..p.len() - 1).map(|i| Face::Tri([p[0], p[i], p[i + 1]])))
-                }
-                _ => {}
-            }
-        }
-        let n = positions.len();
-        if faces
-            .iter()
-            .flat_map(|f| f.indices())
-            .any(|&i| i as usize >= n)
-        {
-            bail!("{}: a face index is out of range", path.display());
-        }
-        Mesh {
-            positions,
-            faces,
-            lines: Vec::new(),
-        }
-    })
 }
 
 /// One frame file as a scene to draw.
-fn load_frame(path: &Path, ext: &str) -> Result<RenderScene> {
-    let mesh = read_frame(path, ext)?;
+fn load_frame(path: &Path) -> Result<RenderScene> {
+    let mesh = read_frame(path)?;
     let cloth = ClothInfo {
         name: "frame".into(),
         offset: 0,
@@ -255,7 +196,7 @@ pub fn render_cmd(args: RenderArgs) -> Result<()> {
         .collect();
     let mut scenes: Vec<RenderScene> = to_load
         .par_iter()
-        .map(|(_, p)| load_frame(p, kind))
+        .map(|(_, p)| load_frame(p))
         .collect::<Result<_>>()?;
     if let Some(sc) = &scene {
         // Planes are sized from the cloth of the first loaded frame, the same in every picture.

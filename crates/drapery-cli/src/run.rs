@@ -13,10 +13,12 @@
 //! `--overwrite`.
 
 use crate::formats::{Format, FrameWriter, writer_for};
-use crate::state::{HISTORY_FILE, History, RunState, STATE_FILE, fingerprint};
+use crate::state::{HISTORY_FILE, History, RunState, STATE_FILE};
 use crate::writer::{Sink, Writer};
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
+use drapery::fingerprint::fingerprint;
+use drapery::io::frames::is_frame_file;
 use drapery::model::ClothInfo;
 use drapery::scene::Scene;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -63,7 +65,17 @@ pub struct RunArgs {
     /// Testing: stop with an error after frame N is written (as if killed).
     #[arg(long, hide = true, value_name = "N")]
     pub stop_after_frames: Option<usize>,
+    /// Testing (the kill-and-resume test): end the process abruptly, as a kill would, right
+    /// after frame N's files, history and state are on disk. The writer thread ends it there
+    /// while the step loop may be frames ahead; nothing else runs (no whole-run file, no
+    /// summary, no destructor). Exit code [`ABORT_EXIT_CODE`]; an exit rather than an abort
+    /// so that no core dump is written.
+    #[arg(long, hide = true, value_name = "N")]
+    pub abort_after_frame: Option<usize>,
 }
+
+/// The exit code of `--abort-after-frame`.
+pub const ABORT_EXIT_CODE: i32 = 134;
 
 /// The file name stem of whole-run outputs: the scene file's stem (`hang` for `hang.toml`).
 fn run_stem(scene: &Path) -> String {
@@ -72,17 +84,6 @@ fn run_stem(scene: &Path) -> String {
         .map(|s| s.to_string_lossy().into_owned())
         .filter(|s| !s.is_empty())
         .unwrap_or_else(|| "drapery".into())
-}
-
-/// True for `frame_<digits>.obj` / `.ply` and for the temporary files of atomic writes of those.
-fn is_frame_file(name: &str) -> bool {
-    let name = name.strip_prefix('.').unwrap_or(name);
-    let Some(rest) = name.strip_prefix("frame_") else {
-        return false;
-    };
-    let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
-    let ext = &rest[digits..];
-    digits > 0 && (ext.starts_with(".obj") || ext.starts_with(".ply"))
 }
 
 /// Whether DIR holds frames or a run state.
@@ -170,7 +171,7 @@ fn plan_start(args: &RunArgs, fp: u64, formats: &str, n: usize, frames: usize) -
             "{shown}: the run was started with --format {}; resume it with the same formats",
             st.formats
         ),
-        Some(st) if st.x.len() != n || st.v.len() != n || st.frame as usize > frames => {
+        Some(st) if st.snapshot.particle_count() != n || st.frame as usize > frames => {
             bail!("{shown}: {STATE_FILE} does not match the scene; use --overwrite to start over")
         }
         Some(st) => Ok(Start::Resume(st)),
@@ -184,6 +185,8 @@ struct RunOutput {
     cloths: Vec<ClothInfo>,
     writers: Vec<Box<dyn FrameWriter>>,
     history: History,
+    /// `--abort-after-frame`.
+    abort_after: Option<usize>,
 }
 
 impl Sink for RunOutput {
@@ -191,11 +194,16 @@ impl Sink for RunOutput {
     type Job = RunState;
 
     fn write(&mut self, state: RunState) -> Result<()> {
+        let x = state.snapshot.positions();
         for w in self.writers.iter_mut() {
-            w.frame(state.frame as usize, &self.cloths, &state.x)?;
+            w.frame(state.frame as usize, &self.cloths, x)?;
         }
-        self.history.push(&state.x)?;
-        state.save(&self.dir)
+        self.history.push(x)?;
+        state.save(&self.dir)?;
+        if self.abort_after == Some(state.frame as usize) {
+            std::process::exit(ABORT_EXIT_CODE);
+        }
+        Ok(())
     }
 }
 
@@ -247,11 +255,7 @@ pub fn run(args: RunArgs) -> Result<()> {
             },
         ),
         Start::Resume(st) => {
-            sim.model.x = st.x;
-            sim.model.v = st.v;
-            sim.warm_start = st.warm_start;
-            sim.time = st.time;
-            sim.steps = st.steps;
+            sim.restore_snapshot(&st.snapshot)?;
             let k = st.frame as usize;
             let h = if keep_history {
                 History::resume(dir, k + 1, sim.model.particle_count())?
@@ -261,16 +265,14 @@ pub fn run(args: RunArgs) -> Result<()> {
             (k + 1, h)
         }
     };
-    let snapshot = |k: usize, sim: &drapery::Simulation| RunState {
-        fingerprint: fp,
-        frame: k as u64,
-        steps: sim.steps,
-        time: sim.time,
-        formats: format_list.clone(),
-        stem: stem.clone(),
-        x: sim.model.x.clone(),
-        v: sim.model.v.clone(),
-        warm_start: sim.warm_start.clone(),
+    let snapshot = |k: usize, sim: &drapery::Simulation| {
+        RunState::new(
+            fp,
+            k as u64,
+            format_list.clone(),
+            stem.clone(),
+            sim.snapshot(),
+        )
     };
     let steps_per_frame = scene.steps_per_frame();
     let h = scene.step_size();
@@ -295,6 +297,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         cloths: sim.model.cloths.clone(),
         writers: per_frame,
         history,
+        abort_after: args.abort_after_frame,
     })?;
     // Hands frame k to the writer; `--stop-after-frames k` then waits until it is on disk.
     let emit = |k: usize, sim: &drapery::Simulation, writer: &mut Writer<RunOutput>| {

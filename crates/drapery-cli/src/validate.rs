@@ -3,8 +3,8 @@
 use anyhow::Result;
 use clap::Args;
 use drapery::LinearSolver;
-use drapery::model::SpringKind;
 use drapery::scene::Scene;
+use drapery::stats::cloth_stats;
 use std::path::PathBuf;
 
 /// Arguments of `drapery validate`.
@@ -21,31 +21,19 @@ pub fn validate(args: ValidateArgs) -> Result<()> {
     let model = &sim.model;
     let mut out = String::new();
     out.push_str(&format!("scene {}: ok\n", args.scene.display()));
-    for c in &model.cloths {
-        let range = c.range();
-        let springs: Vec<usize> = (0..model.springs.len())
-            .filter(|&s| range.contains(&(model.springs.i[s] as usize)))
-            .collect();
-        let count = |k: SpringKind| {
-            springs
-                .iter()
-                .filter(|&&s| model.springs.kind[s] == k)
-                .count()
-        };
-        let mass: f64 = model.mass[range.clone()].iter().sum();
-        let pins = model.pinned[range].iter().filter(|&&p| p).count();
+    for (c, st) in model.cloths.iter().zip(cloth_stats(model)) {
         out.push_str(&format!(
             "cloth '{}': {} vertices, {} faces, {} line elements, {} springs ({} stretch, {} shear, {} bend), {} pinned, mass {} kg\n",
             c.name,
-            c.mesh.vertex_count(),
-            c.mesh.faces.len(),
-            c.mesh.lines.len(),
-            springs.len(),
-            count(SpringKind::Stretch),
-            count(SpringKind::Shear),
-            count(SpringKind::Bend),
-            pins,
-            sig(mass),
+            st.vertices,
+            st.faces,
+            st.line_elements,
+            st.springs(),
+            st.stretch_springs,
+            st.shear_springs,
+            st.bend_springs,
+            st.pinned,
+            sig(st.mass),
         ));
     }
     match &model.collision {

@@ -14,6 +14,7 @@
 pub mod collision;
 pub mod constraints;
 pub mod error;
+pub mod fingerprint;
 pub mod forces;
 pub mod io;
 pub mod linalg;
@@ -23,6 +24,8 @@ pub mod model;
 pub mod presets;
 pub mod render;
 pub mod scene;
+pub mod snapshot;
+pub mod stats;
 pub mod step;
 pub mod validate;
 

@@ -1,6 +1,7 @@
 //! File formats, one file per format. Every writer goes through [`write_atomic`]: a file is
 //! written whole (temporary file in the same folder, then rename) or not at all.
 
+pub mod frames;
 pub mod gltf;
 pub mod obj;
 pub mod ply;

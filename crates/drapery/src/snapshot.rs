@@ -1,0 +1,355 @@
+//! A snapshot of a simulation's state, to continue a run to the same bits later (the CLI's
+//! `--resume`, a front end's save and load, tests).
+//!
+//! [`Simulation::snapshot`] takes what a step depends on that changes from step to step: every
+//! position and velocity, the solver's warm start (the previous step's velocity change), the
+//! simulated time and the step count. [`Simulation::restore_snapshot`] puts it back into a simulation
+//! built from the same scene (same model and settings); stepping on from there gives bit for
+//! bit what the uninterrupted run gives. Everything else a step uses is rebuilt from the model
+//! at [`Simulation::new`] and does not change during a run.
+//!
+//! [`Snapshot::to_bytes`] / [`Snapshot::from_bytes`] store it exactly (every f64 as its bits)
+//! with a free-form header of the front end's (the CLI keeps its frame index, output formats
+//! and the scene fingerprint there, see [`crate::fingerprint`]). Layout, little endian: the
+//! magic `DRAPERY-STATE-3\n`, u64 header length + header bytes, u64 steps, u64 time bits, u64
+//! particle count n, 3n f64 positions, 3n f64 velocities, 3n f64 warm start, and a u64 FNV-1a
+//! checksum ([`Fnv`]) of everything before it.
+
+use crate::error::{Error, Result};
+use crate::fingerprint::Fnv;
+use crate::step::Simulation;
+use crate::math::Vec3;
+
+/// The magic of the current layout.
+const MAGIC: &[u8] = b"DRAPERY-STATE-3\n";
+/// What every version's magic starts with (`DRAPERY-STATE-2\n` was the CLI's own layout).
+const MAGIC_FAMILY: &[u8] = b"DRAPERY-STATE-";
+
+/// The state of a [`Simulation`] between two steps, exact to the bit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Snapshot {
+    header: Vec<u8>,
+    time: f64,
+    steps: u64,
+    x: Vec<Vec3>,
+    v: Vec<Vec3>,
+    warm_start: Vec<Vec3>,
+}
+
+impl Simulation {
+    /// The state now (empty header): restoring it into a simulation built from the same scene
+    /// continues this run to the same bits.
+    pub fn snapshot(&self) -> Snapshot {
+        Snapshot {
+            header: Vec::new(),
+            time: self.time,
+            steps: self.steps,
+            x: self.model.x.clone(),
+            v: self.model.v.clone(),
+            warm_start: self.warm_start.clone(),
+        }
+    }
+
+    /// Puts a snapshot's state back (positions, velocities, warm start, time, step count).
+    /// The simulation must be built from the same scene as the one the snapshot was taken
+    /// from; an error, changing nothing, when the particle counts differ.
+    pub fn restore_snapshot(&mut self, s: &Snapshot) -> Result<()> {
+        let n = self.model.particle_count();
+        if s.particle_count() != n {
+            return Err(Error::Invalid(format!(
+                "the snapshot holds {} particles but the simulation has {n}: not a state of this scene",
+                s.particle_count()
+            )));
+        }
+        self.model.x.clone_from(&s.x);
+        self.model.v.clone_from(&s.v);
+        self.warm_start.clone_from(&s.warm_start);
+        self.time = s.time;
+        self.steps = s.steps;
+        Ok(())
+    }
+}
+
+fn damaged(why: &str) -> Error {
+    Error::Invalid(format!("damaged or not a drapery state file ({why})"))
+}
+
+impl Snapshot {
+    /// The front end's header bytes (empty unless set).
+    pub fn header(&self) -> &[u8] {
+        &self.header
+    }
+
+    /// Sets the header: free-form bytes stored and checksummed with the state.
+    pub fn with_header(mut self, header: Vec<u8>) -> Snapshot {
+        self.header = header;
+        self
+    }
+
+    /// Simulated time, s.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// Number of particles.
+    pub fn particle_count(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Positions, m.
+    pub fn positions(&self) -> &[Vec3] {
+        &self.x
+    }
+
+    /// Velocities, m/s.
+    pub fn velocities(&self) -> &[Vec3] {
+        &self.v
+    }
+
+    /// The bytes described in the [module documentation](self).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(64 + self.header.len() + 72 * self.x.len());
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&(self.header.len() as u64).to_le_bytes());
+        out.extend_from_slice(&self.header);
+        for v in [self.steps, self.time.to_bits(), self.x.len() as u64] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        for vecs in [&self.x, &self.v, &self.warm_start] {
+            for p in vecs.iter() {
+                for k in 0..3 {
+                    out.extend_from_slice(&p[k].to_le_bytes());
+                }
+            }
+        }
+        let sum = Fnv::new().bytes(&out).finish();
+        out.extend_from_slice(&sum.to_le_bytes());
+        out
+    }
+
+    /// Reads [`Snapshot::to_bytes`]'s bytes back; an [`Error::Invalid`] saying what is wrong
+    /// when they are not a snapshot of this version, are cut short or damaged.
+    pub fn from_bytes(b: &[u8]) -> Result<Snapshot> {
+        if !b.starts_with(MAGIC) {
+            let head = &b[..b.len().min(32)];
+            return Err(match head.iter().position(|&c| c == b'\n') {
+                Some(end) if head.starts_with(MAGIC_FAMILY) => Error::Invalid(format!(
+                    "a state file of another version of drapery ({}), which this one cannot read",
+                    String::from_utf8_lossy(&head[..end])
+                )),
+                _ => damaged("no DRAPERY-STATE header"),
+            });
+        }
+        if b.len() < MAGIC.len() + 8 {
+            return Err(damaged("cut short"));
+        }
+        let (body, sum) = b.split_at(b.len() - 8);
+        if Fnv::new().bytes(body).finish().to_le_bytes() != sum {
+            return Err(damaged("checksum mismatch"));
+        }
+        let mut r = Reader {
+            b: body,
+            at: MAGIC.len(),
+        };
+        let short = || damaged("cut short");
+        let header_len = usize::try_from(r.u64().ok_or_else(short)?).map_err(|_| short())?;
+        let header = r.take(header_len).ok_or_else(short)?.to_vec();
+        let steps = r.u64().ok_or_else(short)?;
+        let time = f64::from_bits(r.u64().ok_or_else(short)?);
+        let n = r.u64().ok_or_else(short)?;
+        let rest = (body.len() - r.at) as u64;
+        if n.checked_mul(72) != Some(rest) {
+            return Err(damaged("the particle count does not match the length"));
+        }
+        let n = n as usize;
+        let mut vecs = || decode_vecs(r.take(24 * n).unwrap_or_default());
+        let (x, v, warm_start) = (vecs(), vecs(), vecs());
+        Ok(Snapshot {
+            header,
+            time,
+            steps,
+            x,
+            v,
+            warm_start,
+        })
+    }
+}
+
+/// Reads the byte string from the front.
+struct Reader<'a> {
+    b: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
+        let s = self.b.get(self.at..self.at.checked_add(n)?)?;
+        self.at += n;
+        Some(s)
+    }
+    fn u64(&mut self) -> Option<u64> {
+        self.take(8)?.try_into().ok().map(u64::from_le_bytes)
+    }
+}
+
+/// Little-endian f64 triples.
+fn decode_vecs(raw: &[u8]) -> Vec<Vec3> {
+    raw.chunks_exact(24)
+        .map(|c| {
+            let f = |i: usize| f64::from_le_bytes(c[8 * i..8 * i + 8].try_into().unwrap_or([0; 8]));
+            Vec3::new(f(0), f(1), f(2))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::presets::Preset;
+
+    const H: f64 = 1.0 / 60.0;
+
+    fn run(sim: &mut Simulation, steps: usize) {
+        for _ in 0..steps {
+            sim.step(H).unwrap();
+        }
+    }
+
+    fn assert_same_bits(a: &Snapshot, b: &Snapshot) {
+        assert_eq!(a.time.to_bits(), b.time.to_bits());
+        assert_eq!(a.steps, b.steps);
+        for (what, p, q) in [
+            ("x", &a.x, &b.x),
+            ("v", &a.v, &b.v),
+            ("warm start", &a.warm_start, &b.warm_start),
+        ] {
+            assert_eq!(p.len(), q.len());
+            for (i, (p, q)) in p.iter().zip(q.iter()).enumerate() {
+                for k in 0..3 {
+                    assert_eq!(p[k].to_bits(), q[k].to_bits(), "{what}[{i}][{k}]");
+                }
+            }
+        }
+    }
+
+    /// Steps `n`, snapshots, goes through bytes, restores into a fresh simulation and steps `m`
+    /// more: the same bits as `n + m` steps in one go.
+    fn resumes_to_the_same_bits(preset: Preset, size: usize, n: usize, m: usize) {
+        let fresh = || preset.simulation(size, 1e-3).unwrap();
+        let mut whole = fresh();
+        run(&mut whole, n + m);
+
+        let mut first = fresh();
+        run(&mut first, n);
+        let bytes = first.snapshot().to_bytes();
+        let mut second = fresh();
+        assert_ne!(
+            second.model.x, first.model.x,
+            "the first part of the run must move the cloth"
+        );
+        second
+            .restore_snapshot(&Snapshot::from_bytes(&bytes).unwrap())
+            .unwrap();
+        assert_same_bits(&second.snapshot(), &first.snapshot());
+        run(&mut second, m);
+        assert_same_bits(&second.snapshot(), &whole.snapshot());
+    }
+
+    #[test]
+    fn a_restored_run_continues_to_the_bits_of_an_uninterrupted_one() {
+        resumes_to_the_same_bits(Preset::Hang, 8, 7, 5);
+    }
+
+    #[test]
+    fn a_restored_run_in_contact_continues_to_the_same_bits() {
+        // The drape cloth reaches the sphere after about 9 steps: the second part is in contact.
+        let mut probe = Preset::Drape.simulation(8, 1e-3).unwrap();
+        run(&mut probe, 12);
+        assert!(
+            probe.model.x.iter().any(|p| p.length() < 0.3 + 0.01),
+            "no contact yet"
+        );
+        resumes_to_the_same_bits(Preset::Drape, 8, 12, 8);
+    }
+
+    fn sample() -> Snapshot {
+        Snapshot {
+            header: b"frame 7".to_vec(),
+            time: 7.0 / 60.0,
+            steps: 14,
+            x: vec![
+                Vec3::new(0.1, -0.0, f64::MIN_POSITIVE),
+                Vec3::new(1e300, 2.5, -3.0),
+            ],
+            v: vec![Vec3::new(1.0 / 3.0, 0.0, -1e-300), Vec3::ZERO],
+            warm_start: vec![
+                Vec3::new(0.25, -0.0, 1e-5),
+                Vec3::new(f64::MIN_POSITIVE, 2.0, 3.0),
+            ],
+        }
+    }
+
+    #[test]
+    fn bytes_round_trip_every_bit() {
+        let s = sample();
+        let r = Snapshot::from_bytes(&s.to_bytes()).unwrap();
+        assert_eq!(r, s);
+        assert_eq!(r.header(), b"frame 7");
+        assert_eq!(r.x[0].y.to_bits(), (-0.0f64).to_bits());
+        assert_same_bits(&r, &s);
+    }
+
+    #[test]
+    fn damaged_cut_or_foreign_bytes_are_refused_with_a_reason() {
+        let b = sample().to_bytes();
+        let message = |bytes: &[u8]| match Snapshot::from_bytes(bytes) {
+            Ok(_) => panic!("accepted damaged bytes"),
+            Err(e) => e.to_string(),
+        };
+        for i in [MAGIC.len() + 3, MAGIC.len() + 20, b.len() / 2, b.len() - 1] {
+            let mut bad = b.clone();
+            bad[i] ^= 1;
+            assert!(message(&bad).contains("checksum"), "flip at {i}");
+        }
+        let mut bad = b.clone();
+        bad[0] ^= 1;
+        assert!(message(&bad).contains("no DRAPERY-STATE header"));
+        assert!(message(&b[..b.len() - 9]).contains("damaged"));
+        assert!(message(&b[..MAGIC.len() + 3]).contains("cut short"));
+        assert!(message(b"").contains("damaged"));
+        let mut old = b.clone();
+        old[..MAGIC.len()].copy_from_slice(b"DRAPERY-STATE-2\n");
+        let m = message(&old);
+        assert!(
+            m.contains("another version") && m.contains("DRAPERY-STATE-2"),
+            "{m}"
+        );
+
+        // A consistent checksum over a particle count that does not fit the length.
+        let mut lying = b[..b.len() - 8].to_vec();
+        let at = MAGIC.len() + 8 + b"frame 7".len() + 16;
+        lying[at..at + 8].copy_from_slice(&3u64.to_le_bytes());
+        let sum = Fnv::new().bytes(&lying).finish();
+        lying.extend_from_slice(&sum.to_le_bytes());
+        assert!(message(&lying).contains("particle count"));
+    }
+
+    #[test]
+    fn a_snapshot_of_another_particle_count_is_refused_and_changes_nothing() {
+        let mut small = Preset::Hang.simulation(4, 1e-3).unwrap();
+        run(&mut small, 2);
+        let mut big = Preset::Hang.simulation(5, 1e-3).unwrap();
+        let before = big.snapshot();
+        let e = big
+            .restore_snapshot(&small.snapshot())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("16 particles") && e.contains("25"), "{e}");
+        assert_same_bits(&big.snapshot(), &before);
+    }
+}
