@@ -10,8 +10,9 @@ use common::{assert_one_error, drapery};
 fn documented_scenes() -> Vec<String> {
     let r = drapery(&["bench", "--help"]);
     assert_eq!(r.code, Some(0), "{}", r.stderr);
-    let (_, rest) = r
-        .stdout
+    // The help may be wrapped (to the terminal, or 100 columns): read it as one line.
+    let text = r.stdout.split_whitespace().collect::<Vec<_>>().join(" ");
+    let (_, rest) = text
         .split_once("default: all standard scenes")
         .expect("the help names the default scenes");
     let list = rest.split_whitespace().next().unwrap_or_default();
