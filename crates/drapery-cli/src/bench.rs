@@ -4,7 +4,7 @@
 //! `hang-N` hangs from two corners; `drape-N` falls on a sphere (self-collision on);
 //! `pile-N` falls on the ground, tilted, and folds onto itself (self-collision on).
 //! Each scene is first advanced by some untimed warm-up frames (so that collision scenes are
-//! in contact), then `--frames` frames are timed. Each frame is written as OBJ to a temporary
+//! in contact; `--warm-up` overrides the count), then `--frames` frames are timed. Each frame is written as OBJ to a temporary
 //! folder through the same writer thread as `drapery run` ([`crate::writer`]): the loop steps,
 //! hands the positions off, and steps the next frame while the writer writes.
 //!
@@ -44,6 +44,11 @@ pub struct BenchArgs {
     /// PCG relative tolerance for every scene.
     #[arg(long, default_value_t = 1e-3)]
     tolerance: f64,
+    /// Untimed frames before the timed ones (default: each scene's own, hang 5, drape 30,
+    /// pile 40, so that the collision scenes are in contact). `--warm-up 0` makes a quick
+    /// smoke run.
+    #[arg(long, value_name = "FRAMES")]
+    warm_up: Option<usize>,
 }
 
 const STANDARD: &[&str] = &[
@@ -62,10 +67,12 @@ fn parse(name: &str) -> Result<(Preset, usize)> {
     Ok(Preset::parse(name)?)
 }
 
-/// Builds a named scene; returns the simulation and its warm-up frame count.
-fn scene(name: &str, tolerance: f64) -> Result<(Simulation, usize)> {
+/// Builds a named scene; returns the simulation and its warm-up frame count (`warm_up`, or the
+/// scene's own).
+fn scene(name: &str, tolerance: f64, warm_up: Option<usize>) -> Result<(Simulation, usize)> {
     let (preset, n) = parse(name)?;
-    Ok((preset.simulation(n, tolerance)?, preset.warm_up_frames()))
+    let warm = warm_up.unwrap_or(preset.warm_up_frames());
+    Ok((preset.simulation(n, tolerance)?, warm))
 }
 
 /// Peak resident set size of this process, MiB (Linux), if known.
@@ -100,8 +107,9 @@ impl Sink for ObjFile {
     }
 }
 
-fn run_once(name: &str, frames: usize, tolerance: f64, dir: &std::path::Path) -> Result<RunTimes> {
-    let (mut sim, warm) = scene(name, tolerance)?;
+fn run_once(args: &BenchArgs, name: &str, dir: &std::path::Path) -> Result<RunTimes> {
+    let (frames, tolerance) = (args.frames, args.tolerance);
+    let (mut sim, warm) = scene(name, tolerance, args.warm_up)?;
     let h = 1.0 / 60.0;
     for _ in 0..warm {
         sim.step(h)
@@ -163,8 +171,12 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     }
     let dir = std::env::temp_dir().join(format!("drapery-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).with_context(|| dir.display().to_string())?;
+    let warm_up = match args.warm_up {
+        Some(n) => format!(", {n} warm-up frames"),
+        None => String::new(),
+    };
     println!(
-        "drapery bench: {} timed frames x {} runs per scene, 1 step per frame (dt = 1/60 s), tolerance {:e}, {} threads",
+        "drapery bench: {} timed frames x {} runs per scene{warm_up}, 1 step per frame (dt = 1/60 s), tolerance {:e}, {} threads",
         args.frames,
         args.runs,
         args.tolerance,
@@ -190,7 +202,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     let result = (|| -> Result<()> {
         for s in &scenes {
             let runs: Vec<RunTimes> = (0..args.runs)
-                .map(|_| run_once(s, args.frames, args.tolerance, &dir))
+                .map(|_| run_once(&args, s, &dir))
                 .collect::<Result<_>>()?;
             let m = |f: fn(&RunTimes) -> f64| median(runs.iter().map(f).collect());
             let n: usize = s
