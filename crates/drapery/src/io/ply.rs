@@ -27,12 +27,7 @@
 use crate::error::{Error, Result};
 use crate::math::Vec3;
 use crate::model::ClothInfo;
-use std::path::{Path, PathBuf};
-
-/// The path of frame `k` in a PLY cache folder: `dir/frame_00000.ply`.
-pub fn frame_path(dir: &Path, k: usize) -> PathBuf {
-    dir.join(format!("frame_{k:05}.ply"))
-}
+use std::path::Path;
 
 /// Checks that every cloth's particle range lies inside `x`; returns the particle count used.
 pub(crate) fn check_ranges(cloths: &[ClothInfo], len: usize, what: &str) -> Result<()> {
@@ -416,7 +411,7 @@ mod tests {
     fn written_frame_reads_back_exactly_with_global_face_indices() {
         let (infos, x) = cloths();
         let dir = tempfile::tempdir().unwrap();
-        let path = frame_path(dir.path(), 7);
+        let path = crate::io::frames::frame_path(dir.path(), 7, "ply");
         assert!(path.ends_with("frame_00007.ply"));
         write_ply(&path, &infos, &x).unwrap();
         let (pos, faces) = read_ply(&path).unwrap();
