@@ -347,6 +347,56 @@ impl Model {
         out
     }
 
+    /// Positions, m.
+    pub fn positions(&self) -> &[Vec3] {
+        &self.x
+    }
+
+    /// Velocities, m/s.
+    pub fn velocities(&self) -> &[Vec3] {
+        &self.v
+    }
+
+    /// Lumped masses, kg.
+    pub fn masses(&self) -> &[f64] {
+        &self.mass
+    }
+
+    /// Which particles are pinned.
+    pub fn pins(&self) -> &[bool] {
+        &self.pinned
+    }
+
+    /// Gravitational acceleration, m/s².
+    pub fn gravity(&self) -> Vec3 {
+        self.gravity
+    }
+
+    /// The springs.
+    pub fn springs(&self) -> &Springs {
+        &self.springs
+    }
+
+    /// The cloths, in order, each with its particle range and mesh.
+    pub fn cloths(&self) -> &[ClothInfo] {
+        &self.cloths
+    }
+
+    /// The cloth named `name`.
+    pub fn cloth(&self, name: &str) -> Option<&ClothInfo> {
+        self.cloths.iter().find(|c| c.name == name)
+    }
+
+    /// Collision settings (`None`: collisions off).
+    pub fn collision(&self) -> Option<&crate::collision::settings::CollisionSettings> {
+        self.collision.as_ref()
+    }
+
+    /// The obstacles.
+    pub fn obstacles(&self) -> &[crate::collision::settings::Obstacle] {
+        &self.obstacles
+    }
+
     /// Number of particles.
     pub fn particle_count(&self) -> usize {
         self.x.len()

@@ -294,6 +294,52 @@ impl Simulation {
         mg.set_reference(r, pins);
     }
 
+    /// The model being simulated (its particles' current state included).
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// The step settings the simulation was built with.
+    pub fn settings(&self) -> &SolverSettings {
+        &self.settings
+    }
+
+    /// Simulated time, s.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Steps taken so far.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// Current positions of every particle (cloths in order, each its vertices in order), m.
+    pub fn positions(&self) -> &[Vec3] {
+        &self.model.x
+    }
+
+    /// Current velocities, m/s.
+    pub fn velocities(&self) -> &[Vec3] {
+        &self.model.v
+    }
+
+    /// Sets every particle's position (for control from a front end between steps). An error,
+    /// changing nothing, when the length differs from the particle count or a value is not
+    /// finite. Pinned particles move too: a pin holds a particle where it is.
+    pub fn set_positions(&mut self, x: &[Vec3]) -> Result<()> {
+        check_state("positions", x, self.model.particle_count())?;
+        self.model.x.copy_from_slice(x);
+        Ok(())
+    }
+
+    /// Sets every particle's velocity; as [`Simulation::set_positions`].
+    pub fn set_velocities(&mut self, v: &[Vec3]) -> Result<()> {
+        check_state("velocities", v, self.model.particle_count())?;
+        self.model.v.copy_from_slice(v);
+        Ok(())
+    }
+
     /// The forces acting on the model.
     pub fn forces(&self) -> &[Box<dyn Force>] {
         &self.forces
@@ -359,6 +405,23 @@ impl Simulation {
     }
 }
 
+/// `values` has one finite entry per particle.
+fn check_state(field: &str, values: &[Vec3], n: usize) -> Result<()> {
+    if values.len() != n {
+        return Err(crate::Error::field(
+            field,
+            format!("{} values given for {n} particles", values.len()),
+        ));
+    }
+    if let Some(i) = values.iter().position(|p| !p.is_finite()) {
+        return Err(crate::Error::field(
+            field,
+            format!("particle {i} is not finite: {}", values[i]),
+        ));
+    }
+    Ok(())
+}
+
 /// The forces of a model: gravity, then springs and spring damping (the springs with a
 /// nonzero coefficient), then air drag if any particle has it.
 fn model_forces(model: &Model, settings: &SolverSettings) -> Vec<Box<dyn Force>> {
@@ -391,4 +454,28 @@ fn model_forces(model: &Model, settings: &SolverSettings) -> Vec<Box<dyn Force>>
         }));
     }
     forces
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_state_can_be_set_between_steps_but_only_whole_and_finite() {
+        let mut sim = Simulation::new(testing::sheet(3, 0.5, vec![0]), SolverSettings::default())
+            .unwrap();
+        let n = sim.positions().len();
+        let e = sim.set_positions(&vec![Vec3::ZERO; n - 1]).unwrap_err();
+        assert_eq!(e.to_string(), "positions: 8 values given for 9 particles");
+        let mut v = sim.velocities().to_vec();
+        v[4].z = f64::NAN;
+        let e = sim.set_velocities(&v).unwrap_err().to_string();
+        assert!(e.starts_with("velocities: particle 4 is not finite"), "{e}");
+        let x: Vec<Vec3> = sim.positions().iter().map(|p| *p + Vec3::Y).collect();
+        sim.set_positions(&x).unwrap();
+        sim.step(0.01).unwrap();
+        // the pinned particle stays where it was put
+        assert_eq!(sim.positions()[0], x[0]);
+        assert_eq!((sim.steps(), sim.time()), (1, 0.01));
+    }
 }
