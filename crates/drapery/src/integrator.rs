@@ -1,7 +1,7 @@
-//! Linearized implicit Euler (Baraff & Witkin 1998), MATH.md §1, and its Newton extension.
+//! Linearized implicit Euler (Baraff & Witkin 1998), docs/MATH.md §1, and its Newton form, §10.
 //!
 //! One step solves `(M - h D - h² K) Δv = h (f + h K v)` at `(x₀, v₀)`, then
-//! `v₁ = v₀ + Δv`, `x₁ = x₀ + h v₁`. Pinned particles are filtered (MATH.md §5): their
+//! `v₁ = v₀ + Δv`, `x₁ = x₀ + h v₁`. Pinned particles are filtered (docs/MATH.md §5): their
 //! velocity change is prescribed so that they end the step at rest, exactly where they were.
 //!
 //! With `newton_iterations > 1` the step keeps iterating Newton on the incremental potential

@@ -2,7 +2,7 @@
 //!
 //! Before the solve:
 //! * [`obstacle_contacts`]: particles within the thickness of an obstacle (and not moving away
-//!   from it) become velocity constraints of the filtered solve (MATH.md §5): their normal
+//!   from it) become velocity constraints of the filtered solve (docs/MATH.md §14): their normal
 //!   velocity relative to the obstacle is prescribed so that they end the step at the thickness.
 //! * cloth–cloth close pairs become repulsion stencils ([`crate::forces::Repulsions`]), whose
 //!   Jacobians enter the same matrix.
