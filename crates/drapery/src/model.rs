@@ -402,7 +402,7 @@ impl Model {
         self.x.len()
     }
 
-    /// The velocity filter of the pins alone (MATH.md §5): `0` for a pinned particle, `I`
+    /// The velocity filter of the pins alone (docs/MATH.md §5): `0` for a pinned particle, `I`
     /// otherwise.
     pub fn pin_filter(&self) -> Vec<Mat3> {
         crate::constraints::pins::filter(&self.pinned)

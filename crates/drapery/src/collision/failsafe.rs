@@ -1,5 +1,5 @@
 //! The collision fail-safe: after the solve and friction, nothing may have passed through
-//! anything over the step (docs/MATH.md §4).
+//! anything over the step (docs/MATH.md §16).
 //!
 //! * each particle's straight path is swept against the analytic obstacles (conservative
 //!   advancement on their signed distance, which is 1-Lipschitz); a particle that would come

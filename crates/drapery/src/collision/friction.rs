@@ -1,4 +1,4 @@
-//! Coulomb friction, applied to the velocities after the solve: cloth–cloth contacts first
+//! Coulomb friction (docs/MATH.md §15), applied to the velocities after the solve: cloth–cloth contacts first
 //! ([`apply_contact_friction`]), then obstacle contacts ([`apply_obstacle_friction`]), which
 //! bound what holds a pile.
 //!
@@ -10,7 +10,7 @@
 //! [`super::repulsion`]) has the relative velocity `u = Σ wᵢ vᵢ` of its two closest points.
 //! Its normal impulse over the step is estimated from the repulsion the implicit solve applied:
 //! with the normal and weights fixed over the step, the linearized penalty force at the end
-//! positions `x₁` is `k (η - n·Σ wᵢ x₁ᵢ)` along `n` (MATH.md §4; the Jacobian in the matrix is
+//! positions `x₁` is `k (η - n·Σ wᵢ x₁ᵢ)` along `n` (docs/MATH.md §4; the Jacobian in the matrix is
 //! `-k wwᵀ ⊗ nnᵀ`), so `jₙ = h k max(0, η - n·Σ wᵢ x₁ᵢ)`.
 //!
 //! Friction is a tangential impulse `P` (against the tangential part `uₜ` of `u`) given to the

@@ -8,7 +8,7 @@
 //! * [`broad_phase`] finds vertex–triangle and edge–edge candidates from swept boxes;
 //! * [`distance`] gives closest points and the barycentric weights of a contact;
 //! * [`proximity`] turns candidates into contact stencils (particle indices and weights);
-//! * [`repulsion`] turns a close pair into forces and a 12×12 Jacobian (MATH.md §4);
+//! * [`repulsion`] turns a close pair into forces and a 12×12 Jacobian (docs/MATH.md §4);
 //! * [`friction`] applies Coulomb friction to cloth–cloth contacts after the solve;
 //! * [`ccd`] finds the earliest time of impact over a step, so nothing passes through;
 //! * [`colliders`] describes analytic and mesh obstacles with rigid motion;

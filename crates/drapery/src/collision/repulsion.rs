@@ -1,4 +1,4 @@
-//! Penalty repulsion between close primitives (MATH.md §4, with the seed's sign corrected).
+//! Penalty repulsion between close primitives (docs/MATH.md §4, with the seed's sign corrected).
 //!
 //! A contact is a *stencil* of four particles `x₀…x₃` with fixed weights `w` whose weighted sum
 //! `u = Σ wᵢ xᵢ` is the separation vector between the two closest points:

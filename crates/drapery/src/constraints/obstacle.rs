@@ -1,4 +1,4 @@
-//! Obstacle contacts as constraints of the solve, on an active set (docs/MATH.md §5).
+//! Obstacle contacts as constraints of the solve, on an active set (docs/MATH.md §14).
 //!
 //! [`find`] lists the candidates at the start of a step: free particles close to an obstacle
 //! and not moving away from it fast enough. A held candidate prescribes the particle's normal

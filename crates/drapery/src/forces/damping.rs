@@ -1,4 +1,4 @@
-//! Damping along springs, MATH.md §3.
+//! Damping along springs, docs/MATH.md §3.
 //!
 //! `u = v_i - v_j`, `f_i = -c (u·n) n = -f_j`, `∂f_i/∂v_i = -c n nᵀ` (symmetric, negative
 //! semi-definite). The position derivative

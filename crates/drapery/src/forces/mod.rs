@@ -1,6 +1,6 @@
 //! Forces, one file each, behind one trait.
 //!
-//! Convention (MATH.md): `f(x, v)` is the force, `K = ∂f/∂x` and `D = ∂f/∂v` its Jacobians in
+//! Convention (docs/MATH.md): `f(x, v)` is the force, `K = ∂f/∂x` and `D = ∂f/∂v` its Jacobians in
 //! 3×3 blocks. For a conservative force `f = -∇E` and `K = -∇²E`. Every force here is checked
 //! against central finite differences in its tests.
 

@@ -1,4 +1,4 @@
-//! Point–triangle and edge–edge repulsion (MATH.md §4) as a force in the implicit solve.
+//! Point–triangle and edge–edge repulsion (docs/MATH.md §4) as a force in the implicit solve.
 //!
 //! Each stencil holds four particles and fixed weights (barycentric for a vertex–triangle pair,
 //! edge parameters for an edge–edge pair), chosen at the start of the step; the penalty

@@ -1,4 +1,4 @@
-//! Linear springs (stretch, shear and bend alike), MATH.md §2.
+//! Linear springs (stretch, shear and bend alike), docs/MATH.md §2.
 //!
 //! Between particles i and j with stiffness `k` and rest length `L`: `d = x_i - x_j`,
 //! `ℓ = |d|`, `n = d/ℓ`, `E = ½ k (ℓ - L)²`, `f_i = -k (ℓ - L) n = -f_j`.

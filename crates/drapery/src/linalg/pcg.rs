@@ -1,4 +1,4 @@
-//! Baraff & Witkin's modified preconditioned conjugate gradient (MATH.md §5).
+//! Baraff & Witkin's modified preconditioned conjugate gradient (docs/MATH.md §5, §11).
 //!
 //! Solves `A x = b` on the subspace left free by a per-particle filter `S_i`
 //! (`I` for a free particle, `0` for a pinned one, `I - n nᵀ` for one held against a plane),

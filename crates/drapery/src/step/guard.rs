@@ -1,5 +1,5 @@
 //! Checks around a step: before it (a valid step size, a finite state) and after it (the
-//! energy blow-up test). A step that fails leaves the simulation as it was.
+//! energy blow-up test, docs/MATH.md §17). A step that fails leaves the simulation as it was.
 
 use crate::error::{Error, Result};
 use crate::math::Vec3;

@@ -16,6 +16,8 @@
 //! | failsafe | [`failsafe`] | continuous collision detection: nothing crosses anything |
 //! | commit | [`guard`] | energy blow-up test, warm start, time |
 //!
+//! docs/MATH.md §18 walks through one step in this order.
+//!
 //! A step is transactional: the state changes only at commit, so when any stage fails the
 //! simulation is left as it was and an [`crate::Error::StepFailed`] says what and where.
 

@@ -3,7 +3,7 @@
 //!
 //! With `newton_iterations > 1` the step minimizes the incremental potential
 //! `Φ(v) = ½ (v - v₀)ᵀ M (v - v₀) + E(x₀ + h v) + h Ψ(x₀ + h v, v)` (`Ψ` the dissipation
-//! potential of damping and drag; docs/MATH.md §1). The first iteration is the linearized step;
+//! potential of damping and drag; docs/MATH.md §10). The first iteration is the linearized step;
 //! each one halves its step along the solved direction until `Φ` does not increase.
 
 use crate::forces::{Force, Repulsions};

@@ -1,5 +1,5 @@
 //! The constrain and solve stages: the filtered linear solve of one Newton iteration, on the
-//! obstacle active set (docs/MATH.md §5).
+//! obstacle active set (docs/MATH.md §5, §11, §14).
 //!
 //! Each round sets the constraints (pins, then the held obstacle contacts), solves, and lets
 //! the [`ActiveSet`] release contacts that pull and hold again released ones that sink; at most

@@ -6,5 +6,7 @@ mod common;
 mod determinism;
 mod equilibrium;
 mod implicit_step;
+mod pcg_breakdowns;
 mod solvers;
+mod step_failures;
 mod three_particles;

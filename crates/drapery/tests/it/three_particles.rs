@@ -1,4 +1,4 @@
-//! The seeds' 3-particle cloth (MATH.md §6): assembly, signs and the solve checked by hand.
+//! The seeds' 3-particle cloth (docs/MATH.md §6): assembly, signs and the solve checked by hand.
 
 use crate::common::*;
 use drapery::forces::{Force, Springs};
