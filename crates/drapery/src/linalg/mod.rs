@@ -8,6 +8,7 @@ pub(crate) mod block;
 pub mod bsr;
 pub mod direct;
 pub mod pcg;
+pub mod simd;
 pub mod sym;
 pub mod vector;
 

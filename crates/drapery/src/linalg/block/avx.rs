@@ -1,16 +1,20 @@
 //! AVX forms of the block kernels: a 3×3 block's columns are 4-lane vectors (the fourth lane
 //! reads past the column and is discarded or overwritten), a product's column is three
 //! broadcasts, multiplies and adds in glam's order.
+//!
+//! Every function is compiled for AVX (`#[target_feature(enable = "avx")]`) whatever the
+//! build's target CPU; callers reach them only after [`crate::linalg::simd::avx`] said the CPU
+//! has it.
 
 use crate::math::{Mat3, Vec3};
 use std::arch::x86_64::*;
 
 /// `(x, y, z, 0)`.
-#[inline(always)]
+#[inline]
+#[target_feature(enable = "avx")]
 pub(crate) fn load3(v: &Vec3) -> __m256d {
     let p = v as *const Vec3 as *const f64;
-    // SAFETY: both loads are within `v` (three `f64`, `#[repr(C)]`); the build has AVX (the
-    // module is compiled only then).
+    // SAFETY: both loads are within `v` (three `f64`, `#[repr(C)]`).
     unsafe {
         let lo = _mm_loadu_pd(p);
         let hi = _mm_load_sd(p.add(2));
@@ -19,7 +23,8 @@ pub(crate) fn load3(v: &Vec3) -> __m256d {
 }
 
 /// Writes the first three lanes of `a` to `v`.
-#[inline(always)]
+#[inline]
+#[target_feature(enable = "avx")]
 pub(crate) fn store3(v: &mut Vec3, a: __m256d) {
     let p = v as *mut Vec3 as *mut f64;
     // SAFETY: both stores are within `v`.
@@ -31,7 +36,8 @@ pub(crate) fn store3(v: &mut Vec3, a: __m256d) {
 
 /// The columns of `m` as 4-lane vectors (lane 3 is the next column's first entry, or 0 for
 /// the third).
-#[inline(always)]
+#[inline]
+#[target_feature(enable = "avx")]
 pub(crate) fn columns(m: &Mat3) -> [__m256d; 3] {
     let p = m as *const Mat3 as *const f64;
     // SAFETY: the 4-lane loads at 0 and 3 end at 4 and 7, within the nine `f64` of a `Mat3`
@@ -47,24 +53,23 @@ pub(crate) fn columns(m: &Mat3) -> [__m256d; 3] {
 
 /// `m v` for the columns `c` of `m`, added in glam's order `(c₀ x + c₁ y) + c₂ z` (lane 3 is
 /// not used).
-#[inline(always)]
+#[inline]
+#[target_feature(enable = "avx")]
 pub(crate) fn times(c: &[__m256d; 3], v: &Vec3) -> __m256d {
-    // SAFETY: register arithmetic only; the build has AVX.
-    unsafe {
-        let x = _mm256_mul_pd(c[0], _mm256_set1_pd(v.x));
-        let y = _mm256_mul_pd(c[1], _mm256_set1_pd(v.y));
-        let z = _mm256_mul_pd(c[2], _mm256_set1_pd(v.z));
-        _mm256_add_pd(_mm256_add_pd(x, y), z)
-    }
+    // (register arithmetic: safe in an AVX function)
+    let x = _mm256_mul_pd(c[0], _mm256_set1_pd(v.x));
+    let y = _mm256_mul_pd(c[1], _mm256_set1_pd(v.y));
+    let z = _mm256_mul_pd(c[2], _mm256_set1_pd(v.z));
+    _mm256_add_pd(_mm256_add_pd(x, y), z)
 }
 
 /// `acc + Σ_k blocks[k] x[cols[k]]`, in order.
-#[inline(always)]
+#[inline]
+#[target_feature(enable = "avx")]
 pub(crate) fn add_products(acc: Vec3, blocks: &[Mat3], cols: &[u32], x: &[Vec3]) -> Vec3 {
     let mut a = load3(&acc);
     for (m, &j) in blocks.iter().zip(cols) {
-        // SAFETY: register arithmetic only.
-        a = unsafe { _mm256_add_pd(a, times(&columns(m), &x[j as usize])) };
+        a = _mm256_add_pd(a, times(&columns(m), &x[j as usize]));
     }
     let mut out = Vec3::ZERO;
     store3(&mut out, a);
@@ -72,7 +77,8 @@ pub(crate) fn add_products(acc: Vec3, blocks: &[Mat3], cols: &[u32], x: &[Vec3])
 }
 
 /// `Σ left[l] right[r]` over `[l, r]` in `terms`, in order from zero.
-#[inline(always)]
+#[inline]
+#[target_feature(enable = "avx")]
 pub(crate) fn sum_products(left: &[Mat3], right: &[Mat3], terms: &[[u32; 2]]) -> Mat3 {
     // SAFETY: register arithmetic, then 4-lane stores at 0 and 3 of a `Mat3` and `store3` for
     // its third column, in column order, so that each store's lane 3 (the next column's first

@@ -4,6 +4,9 @@
 //! multiplies and two horizontal adds. Each lane adds in the order of the scalar code
 //! ([`super::rows_scalar`]), so the bits are the same (a dot product's last term gains `+ 0`,
 //! which can only turn a `-0` into `+0`).
+//!
+//! Compiled for AVX whatever the build's target CPU; reached only after
+//! [`crate::linalg::simd::avx`] said the CPU has it.
 
 use crate::linalg::block::avx::{load3, store3, times};
 use crate::math::{Mat3, Vec3};
@@ -11,6 +14,7 @@ use std::arch::x86_64::*;
 
 /// See [`super::rows_scalar`]; `values` must hold one block past the last one these rows use
 /// (the padding block of [`super::SymBlockMatrix`]), which the third column's load reads into.
+#[target_feature(enable = "avx")]
 pub(super) fn rows(
     row_ptr: &[u32],
     col: &[u32],
@@ -29,7 +33,7 @@ pub(super) fn rows(
         // SAFETY: block k's columns start at 9 k, 9 k + 3 and 9 k + 6; each 4-lane load ends
         // at most at 9 k + 9, within block k + 1 ≤ `last`, which is in `values` (asserted).
         unsafe {
-            let columns = |k: usize| [0, 3, 6].map(|c| _mm256_loadu_pd(v.add(9 * k + c)));
+            let columns = |k: usize| block_columns(v, k);
             // the diagonal block first, as in the scalar order
             let mut acc = _mm256_add_pd(load3(&y[i - first]), times(&columns(s), &x[i]));
             for (k, &j) in (s + 1..e).zip(&col[s + 1..e]) {
@@ -49,4 +53,15 @@ pub(super) fn rows(
             store3(&mut y[i - first], acc);
         }
     }
+}
+
+/// The three columns of block `k` of the values at `v`, as 4-lane loads.
+///
+/// # Safety
+/// `v` must point to at least `9 k + 10` readable `f64`.
+#[inline]
+#[target_feature(enable = "avx")]
+unsafe fn block_columns(v: *const f64, k: usize) -> [__m256d; 3] {
+    // SAFETY: the caller's bound covers the last load's four lanes, 9 k + 6 .. 9 k + 10.
+    unsafe { [0, 3, 6].map(|c| _mm256_loadu_pd(v.add(9 * k + c))) }
 }
