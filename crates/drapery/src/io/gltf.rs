@@ -697,9 +697,12 @@ pub(crate) mod tests {
         }
     }
 
-    /// Writes `sample.glb` and `sample.usda` (a small animated grid and a static ground) into
-    /// `$DRAPERY_SAMPLE_DIR` when it is set, for `scripts/validate-outputs.sh`; into a
-    /// temporary folder otherwise.
+    /// Writes `sample.glb` and `sample.usda` (a small animated grid, a line-element rope and, in
+    /// the glb, a static ground) into `$DRAPERY_SAMPLE_DIR` when it is set, for
+    /// `scripts/validate-outputs.sh`, into a temporary folder otherwise; and checks that both
+    /// files read back to what was written: names, topology, key times and every position of
+    /// every frame (to f32 precision: glTF stores f32, and frames k ≥ 1 as f32 differences from
+    /// frame 0; USD prints the f32 values, which read back exactly).
     #[test]
     fn sample_outputs() {
         let tmp = tempfile::tempdir().unwrap();
@@ -714,15 +717,70 @@ pub(crate) mod tests {
             Vec3::new(2.0, -1.0, 2.0),
             Vec3::new(-2.0, -1.0, 2.0),
         ];
+        let ground_triangles = [[0, 2, 1], [0, 3, 2]];
         let extra = [StaticMesh {
             name: "ground",
             positions: &ground,
-            triangles: &[[0, 2, 1], [0, 3, 2]],
+            triangles: &ground_triangles,
         }];
         write_glb_with(&dir.join("sample.glb"), &cloths, &frames, 24.0, &extra).unwrap();
         crate::io::usd::write_usda(&dir.join("sample.usda"), &cloths, &frames, 24.0).unwrap();
+
         let g = read_glb(&dir.join("sample.glb")).unwrap();
-        assert_eq!(g.times.len(), frames.len());
+        let times: Vec<f32> = (0..frames.len())
+            .map(|k| (k as f64 / 24.0) as f32)
+            .collect();
+        assert_eq!(g.times, times);
+        assert!(g.interpolations.iter().all(|i| i == "STEP"));
+        let names: Vec<&str> = g.meshes.iter().map(|m| m.name.as_str()).collect();
+        assert_eq!(names, ["sheet", "rope", "ground"]);
+        let sheet_triangles: Vec<u32> = cloths[0].mesh.triangles().into_iter().flatten().collect();
+        assert_eq!(
+            sheet_triangles.len(),
+            3 * 2 * 5 * 4,
+            "a 6×5 grid has 20 quads"
+        );
+        assert_eq!(g.meshes[0].triangles, sheet_triangles);
+        assert!(
+            g.meshes[1].triangles.is_empty(),
+            "the rope has line elements only"
+        );
+        for (c, m) in cloths.iter().zip(&g.meshes) {
+            assert_eq!(m.frames.len(), frames.len(), "{}", c.name);
+            for (k, f) in m.frames.iter().enumerate() {
+                assert_eq!(f.len(), c.mesh.positions.len());
+                for (a, b) in f.iter().zip(&frames[k][c.range()]) {
+                    assert!(close(*a, *b), "{} frame {k}: {a:?} vs {b}", c.name);
+                }
+            }
+        }
+        let static_ground: Vec<[f32; 3]> = ground.iter().map(|p| p.as_vec3().to_array()).collect();
+        assert_eq!(g.meshes[2].frames, vec![static_ground]);
+        assert_eq!(g.meshes[2].triangles, vec![0, 2, 1, 0, 3, 2]);
+
+        let u = crate::io::usd::read_usda(&dir.join("sample.usda")).unwrap();
+        assert_eq!(u.time_codes_per_second, 24.0);
+        assert_eq!((u.start_time_code, u.end_time_code), (0.0, 11.0));
+        let names: Vec<&str> = u.meshes.iter().map(|m| m.name.as_str()).collect();
+        assert_eq!(names, ["sheet", "rope"]);
+        assert_eq!(u.meshes[0].face_vertex_counts, vec![4; 20]);
+        let quads: Vec<u32> = (cloths[0].mesh.faces.iter())
+            .flat_map(|f| f.indices().to_vec())
+            .collect();
+        assert_eq!(u.meshes[0].face_vertex_indices, quads);
+        assert!(u.meshes[1].face_vertex_counts.is_empty());
+        for (c, m) in cloths.iter().zip(&u.meshes) {
+            assert_eq!(m.samples.len(), frames.len());
+            for (k, (t, pts)) in m.samples.iter().enumerate() {
+                assert_eq!(*t, k as f64);
+                let want: Vec<[f32; 3]> = frames[k][c.range()]
+                    .iter()
+                    .map(|p| p.as_vec3().to_array())
+                    .collect();
+                let got: Vec<[f32; 3]> = pts.iter().map(|p| p.as_vec3().to_array()).collect();
+                assert_eq!(got, want, "{} frame {k}", c.name);
+            }
+        }
     }
 
     /// A 6×5 grid and a line-element rope falling and waving (deterministic fake motion).

@@ -170,28 +170,136 @@ fn bad_sizes_cameras_and_inputs_are_errors_and_near_geometry_is_clipped() {
     render(&sheet(Vec3::Y), &down, 16, 16).unwrap();
 }
 
-#[test]
-fn big_preview_dump() {
-    let Some(p) = std::env::var_os("DRAPERY_RENDER_DUMP_BIG") else {
-        return;
+/// Where `p` lands in a `w × h` picture taken by `cam`, in pixels from the top-left corner
+/// (a pinhole model written out here, independent of the renderer's): the forward axis looks at
+/// the target, right is forward × up, and the focal length puts the vertical field of view on
+/// the picture's height.
+fn project(cam: &Camera, w: u32, h: u32, p: Vec3) -> (f64, f64) {
+    let forward = (cam.target - cam.eye).normalize();
+    let right = forward.cross(cam.up).normalize();
+    let up = right.cross(forward);
+    let d = p - cam.eye;
+    let focal = 0.5 * h as f64 / (0.5 * cam.fov_y_deg.to_radians()).tan();
+    let depth = d.dot(forward);
+    (
+        0.5 * w as f64 + focal * d.dot(right) / depth,
+        0.5 * h as f64 - focal * d.dot(up) / depth,
+    )
+}
+
+/// The picture's background at row `y` of `h`: the vertical gradient, averaged over the two
+/// supersampled rows of the pixel.
+fn background_at(y: u32, h: u32) -> [f64; 3] {
+    let (top, bottom) = ([0.96, 0.97, 0.99], [0.74, 0.77, 0.82]);
+    let row = |r: f64| -> [f64; 3] {
+        let t = (r + 0.5) / (2 * h) as f64;
+        [0, 1, 2].map(|k| top[k] + (bottom[k] - top[k]) * t)
     };
+    let (a, b) = (row(2.0 * y as f64), row(2.0 * y as f64 + 1.0));
+    [0, 1, 2].map(|k| 255.0 * 0.5 * (a[k] + b[k]))
+}
+
+/// Projected bounding box `(x0, y0, x1, y1)` of some points.
+fn projected_box(cam: &Camera, w: u32, h: u32, pts: &[Vec3]) -> (f64, f64, f64, f64) {
+    pts.iter().map(|p| project(cam, w, h, *p)).fold(
+        (
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ),
+        |(a, b, c, d), (x, y)| (a.min(x), b.min(y), c.max(x), d.max(y)),
+    )
+}
+
+fn inside(b: (f64, f64, f64, f64), x: u32, y: u32, margin: f64) -> bool {
+    let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
+    px >= b.0 - margin && px <= b.2 + margin && py >= b.1 - margin && py <= b.3 + margin
+}
+
+#[test]
+fn the_sample_animation_is_drawn_where_its_geometry_projects() {
+    // the glTF/USD sample (a falling, waving 6×5 sheet and a rope) over a ground, framed by the
+    // automatic camera: in every frame the cloth's colours appear only inside the projected box
+    // of the sheet, cover its projected area to within its outline, and every pixel outside all
+    // projected boxes is the bare background.
     let (cloths, frames) = crate::io::gltf::tests::sample_animation();
-    let mut scenes = Vec::new();
-    for f in &frames {
-        let mut s = RenderScene::from_frame(&cloths, f).unwrap();
-        s.add_collider(
-            vec![
-                Vec3::new(-2.0, -1.0, -2.0),
-                Vec3::new(2.0, -1.0, -2.0),
-                Vec3::new(2.0, -1.0, 2.0),
-                Vec3::new(-2.0, -1.0, 2.0),
-            ],
-            vec![[0, 2, 1], [0, 3, 2]],
+    let ground = vec![
+        Vec3::new(-2.0, -1.0, -2.0),
+        Vec3::new(2.0, -1.0, -2.0),
+        Vec3::new(2.0, -1.0, 2.0),
+        Vec3::new(-2.0, -1.0, 2.0),
+    ];
+    let scenes: Vec<RenderScene> = frames
+        .iter()
+        .map(|f| {
+            let mut s = RenderScene::from_frame(&cloths, f).unwrap();
+            s.add_collider(ground.clone(), vec![[0, 2, 1], [0, 3, 2]]);
+            s
+        })
+        .collect();
+    let (w, h) = (240, 180);
+    let cam = auto_camera(&scenes, w, h).unwrap();
+    let images = render_frames(&scenes, None, w, h).unwrap();
+    assert_eq!(images.len(), frames.len());
+    let sheet = &cloths[0];
+    let triangles = sheet.mesh.triangles();
+    for (k, (img, x)) in images.iter().zip(&frames).enumerate() {
+        let pts = &x[sheet.range()];
+        let sheet_box = projected_box(&cam, w, h, pts);
+        let rope_box = projected_box(&cam, w, h, &x[cloths[1].range()]);
+        let ground_box = projected_box(&cam, w, h, &ground);
+        let proj: Vec<(f64, f64)> = pts.iter().map(|p| project(&cam, w, h, *p)).collect();
+        // projected area (the sheet does not fold over in this view) and outline length
+        let area: f64 = triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| proj[i as usize]);
+                0.5 * ((b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)).abs()
+            })
+            .sum();
+        let mut edge_count = std::collections::HashMap::new();
+        for t in &triangles {
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                *edge_count.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            }
+        }
+        let outline: f64 = edge_count
+            .iter()
+            .filter(|(_, n)| **n == 1)
+            .map(|((a, b), _)| {
+                let (p, q) = (proj[*a as usize], proj[*b as usize]);
+                (q.0 - p.0).hypot(q.1 - p.1)
+            })
+            .sum();
+        let mut cloth = 0usize;
+        for y in 0..h {
+            for x in 0..w {
+                let p = img.pixel(x, y);
+                if is_orange(p) || is_blue(p) {
+                    cloth += 1;
+                    assert!(
+                        inside(sheet_box, x, y, 1.0),
+                        "frame {k}: cloth colour at ({x}, {y})"
+                    );
+                }
+                if ![sheet_box, rope_box, ground_box]
+                    .iter()
+                    .any(|b| inside(*b, x, y, 1.5))
+                {
+                    let want = background_at(y, h);
+                    for c in 0..3 {
+                        assert!(
+                            (p[c] as f64 - want[c]).abs() <= 1.0,
+                            "frame {k}: ({x}, {y}) is {p:?}, background {want:?}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(
+            (cloth as f64 - area).abs() <= outline,
+            "frame {k}: {cloth} cloth pixels for a projected area of {area:.0} (outline {outline:.0})"
         );
-        scenes.push(s);
     }
-    let imgs = render_frames(&scenes, None, 480, 360).unwrap();
-    let p = std::path::PathBuf::from(p);
-    write_png(&p.with_extension("png"), &imgs[8]).unwrap();
-    write_gif(&p.with_extension("gif"), &imgs, 12.0).unwrap();
 }
