@@ -7,6 +7,14 @@
 //!
 //! Data flows one way: scene → [`model::Model`] → [`step::Simulation::step`] → frames out.
 //! The library never prints and never exits: every failure is an [`Error`] value.
+//! `docs/ARCHITECTURE.md` says what each module owns; `docs/MATH.md` gives the equations.
+//!
+//! Cargo features (both on by default): `render` (the `render` module: pictures of frames,
+//! PNG and GIF) and `formats` (PLY, glTF and USD in `io`). An application that only embeds the
+//! solver can turn them off (`default-features = false`) and compiles no image encoder.
+//!
+//! SIMD is chosen at run time: the block kernels use AVX when the CPU running the program has
+//! it, whatever CPU the build targeted, with the same bits either way (`linalg::simd`).
 #![warn(missing_docs)]
 // `unsafe` only in the AVX block kernels (`linalg::block::avx`, `linalg::sym::avx`), which allow it
 #![deny(unsafe_code)]
@@ -22,6 +30,7 @@ pub mod math;
 pub mod mesh;
 pub mod model;
 pub mod presets;
+#[cfg(feature = "render")]
 pub mod render;
 pub mod scene;
 pub mod snapshot;

@@ -6,7 +6,7 @@
 //! temporary `.frame_KKKKK.EXT.tmpPID`, never a partial frame file under the frame's name.
 
 use crate::error::{Error, Result};
-use crate::mesh::{Face, Mesh};
+use crate::mesh::Mesh;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -106,8 +106,15 @@ pub fn find_frames(dir: &Path) -> Result<Option<Frames>> {
 pub fn read_frame(path: &Path) -> Result<Mesh> {
     match path.extension().and_then(|e| e.to_str()) {
         Some("obj") => crate::io::obj::read_obj(path),
+        #[cfg(not(feature = "formats"))]
+        Some("ply") => Err(Error::input(
+            path.display(),
+            "reading PLY frames needs drapery's `formats` feature",
+        )),
+        #[cfg(feature = "formats")]
         Some("ply") => {
             let (positions, polys) = crate::io::ply::read_ply(path)?;
+            use crate::mesh::Face;
             let mut faces = Vec::with_capacity(polys.len());
             for p in polys {
                 match p[..] {
@@ -223,8 +230,13 @@ property list uchar int vertex_indices\nend_header\n"
         std::fs::write(frame_path(&ply_dir, 1, "ply"), triangle_ply()).unwrap();
         let f = find_frames(&ply_dir).unwrap().unwrap();
         assert_eq!((f.ext, f.last(), f.last_complete()), ("ply", Some(1), None));
-        let mesh = read_frame(&f.files[&1]).unwrap();
-        assert_eq!((mesh.vertex_count(), mesh.faces.len()), (3, 1));
+        if cfg!(feature = "formats") {
+            let mesh = read_frame(&f.files[&1]).unwrap();
+            assert_eq!((mesh.vertex_count(), mesh.faces.len()), (3, 1));
+        } else {
+            let e = read_frame(&f.files[&1]).unwrap_err().to_string();
+            assert!(e.contains("`formats` feature"), "{e}");
+        }
 
         let e = find_frames(&dir.join("missing")).unwrap_err();
         assert!(matches!(e, Error::Io { .. }), "{e}");

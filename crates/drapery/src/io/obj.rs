@@ -590,6 +590,7 @@ mod tests {
         }
     }
 
+    #[cfg(feature = "formats")]
     #[test]
     fn a_reused_writer_gives_each_frame_the_bytes_of_a_fresh_one() {
         let (cloths, frames) = crate::io::gltf::tests::sample_animation();
