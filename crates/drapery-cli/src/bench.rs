@@ -118,12 +118,12 @@ fn run_once(args: &BenchArgs, name: &str, dir: &std::path::Path) -> Result<RunTi
     let mut t = RunTimes::default();
     let mut writer = Writer::start(ObjFile {
         path: dir.join(format!("{name}.obj")),
-        obj: ObjWriter::new(&sim.model.cloths),
+        obj: ObjWriter::new(sim.model().cloths()),
     })?;
     let start = Instant::now();
     for _ in 0..frames {
         let r = sim.step(h).with_context(|| format!("scene {name}"))?;
-        writer.send(sim.model.x.clone())?;
+        writer.send(sim.positions().to_vec())?;
         t.assembly_ms += r.assembly_seconds * 1e3;
         t.solve_ms += r.solve_seconds * 1e3;
         t.collision_ms += r.collision_seconds * 1e3;

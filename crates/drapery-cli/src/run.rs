@@ -233,7 +233,13 @@ pub fn run(args: RunArgs) -> Result<()> {
     let frames = scene.frame_count();
     let dir = &args.output;
     let stem = run_stem(&args.scene);
-    let begin = plan_start(&args, fp, &format_list, sim.model.particle_count(), frames)?;
+    let begin = plan_start(
+        &args,
+        fp,
+        &format_list,
+        sim.model().particle_count(),
+        frames,
+    )?;
 
     std::fs::create_dir_all(dir)
         .with_context(|| format!("{}: cannot create the output folder", dir.display()))?;
@@ -258,7 +264,7 @@ pub fn run(args: RunArgs) -> Result<()> {
             sim.restore_snapshot(&st.snapshot)?;
             let k = st.frame as usize;
             let h = if keep_history {
-                History::resume(dir, k + 1, sim.model.particle_count())?
+                History::resume(dir, k + 1, sim.model().particle_count())?
             } else {
                 History::none()
             };
@@ -294,7 +300,7 @@ pub fn run(args: RunArgs) -> Result<()> {
     let mut steps: u64 = 0;
     let mut writer = Writer::start(RunOutput {
         dir: dir.clone(),
-        cloths: sim.model.cloths.clone(),
+        cloths: sim.model().cloths().to_vec(),
         writers: per_frame,
         history,
         abort_after: args.abort_after_frame,
@@ -309,7 +315,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         Ok(())
     };
     if first == 0 {
-        if sim.model.collision.is_some() {
+        if sim.model().collision().is_some() {
             let (pairs, inside) = sim.intersections();
             if pairs > 0 || inside > 0 {
                 progress.suspend(|| {
@@ -354,7 +360,7 @@ pub fn run(args: RunArgs) -> Result<()> {
     // Whole-run files are written even after a blow-up, with the frames done.
     let mut finish_error = None;
     for w in whole_run.iter_mut() {
-        if let Err(e) = w.finish(&sim.model.cloths, &history.frames) {
+        if let Err(e) = w.finish(sim.model().cloths(), &history.frames) {
             finish_error.get_or_insert(e);
         }
     }

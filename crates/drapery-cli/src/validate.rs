@@ -18,10 +18,10 @@ pub struct ValidateArgs {
 pub fn validate(args: ValidateArgs) -> Result<()> {
     let scene = Scene::load(&args.scene)?;
     let sim = scene.build()?;
-    let model = &sim.model;
+    let model = sim.model();
     let mut out = String::new();
     out.push_str(&format!("scene {}: ok\n", args.scene.display()));
-    for (c, st) in model.cloths.iter().zip(cloth_stats(model)) {
+    for (c, st) in model.cloths().iter().zip(cloth_stats(model)) {
         out.push_str(&format!(
             "cloth '{}': {} vertices, {} faces, {} line elements, {} springs ({} stretch, {} shear, {} bend), {} pinned, mass {} kg\n",
             c.name,
@@ -36,23 +36,23 @@ pub fn validate(args: ValidateArgs) -> Result<()> {
             sig(st.mass),
         ));
     }
-    match &model.collision {
+    match model.collision() {
         None => out.push_str("collision: off\n"),
         Some(c) => out.push_str(&format!(
             "collision: thickness {} m, self_collision {}, friction {}, stiffness {} N/m\n",
             c.thickness, c.self_collision, c.friction, c.stiffness
         )),
     }
-    if model.obstacles.is_empty() {
+    if model.obstacles().is_empty() {
         out.push_str("colliders: none\n");
     }
-    for (i, o) in model.obstacles.iter().enumerate() {
+    for (i, o) in model.obstacles().iter().enumerate() {
         out.push_str(&format!(
             "collider[{i}]: {}\n",
             crate::colliders::describe(o)
         ));
     }
-    if model.collision.is_some() {
+    if model.collision().is_some() {
         let (pairs, inside) = sim.intersections();
         if pairs == 0 && inside == 0 {
             out.push_str("initial state: no intersection\n");
@@ -64,9 +64,9 @@ pub fn validate(args: ValidateArgs) -> Result<()> {
     }
     out.push_str(&format!(
         "total: {} cloths, {} vertices, {} springs, mass {} kg\n",
-        model.cloths.len(),
+        model.cloths().len(),
         model.particle_count(),
-        model.springs.len(),
+        model.springs().len(),
         sig(model.total_mass()),
     ));
     out.push_str(&format!(

@@ -21,7 +21,7 @@ fn reference_frames(scene: &Path, dir: &Path) {
                 sim.step(scene.step_size()).unwrap();
             }
         }
-        let (cloths, x) = (&sim.model.cloths, &sim.model.x);
+        let (cloths, x) = (sim.model().cloths(), sim.model().positions());
         write_obj(&dir.join(format!("frame_{k:05}.obj")), cloths, x).unwrap();
         write_ply(&dir.join(format!("frame_{k:05}.ply")), cloths, x).unwrap();
     }

@@ -57,7 +57,7 @@ fn assembly(bencher: Bencher, n: usize) {
 fn spmv(bencher: Bencher, n: usize) {
     let sim = hang(n);
     let a = sim.matrix();
-    let x: Vec<Vec3> = sim.model.v.clone();
+    let x: Vec<Vec3> = sim.velocities().to_vec();
     let mut y = vec![Vec3::ZERO; a.n()];
     bencher
         .counter(BytesCount::new(spmv_bytes(a)))
@@ -72,7 +72,7 @@ fn sym_spmv(bencher: Bencher, n: usize) {
     let a = sim.matrix();
     let mut sym = SymBlockMatrix::from_pattern(a);
     sym.set_values(a);
-    let x: Vec<Vec3> = sim.model.v.clone();
+    let x: Vec<Vec3> = sim.velocities().to_vec();
     let mut y = vec![Vec3::ZERO; a.n()];
     let mut partial = Vec::new();
     let bytes = sym.nnz_blocks() * (72 + 4) + (a.n() + 1) * 4 + 2 * a.n() * 24;
@@ -84,10 +84,16 @@ fn sym_spmv(bencher: Bencher, n: usize) {
 #[divan::bench(args = [64, 128, 256])]
 fn vcycle(bencher: Bencher, n: usize) {
     let sim = hang(n);
-    let s = sim.model.pin_filter();
+    let s = sim.model().pin_filter();
     let mut mg = Multigrid::default();
     mg.refresh(sim.matrix(), &s);
-    let r: Vec<Vec3> = sim.model.v.iter().zip(&s).map(|(v, f)| *f * *v).collect();
+    let r: Vec<Vec3> = sim
+        .model()
+        .velocities()
+        .iter()
+        .zip(&s)
+        .map(|(v, f)| *f * *v)
+        .collect();
     let mut out = vec![Vec3::ZERO; r.len()];
     bencher.bench_local(|| in_pool(|| mg.apply(&s, divan::black_box(&r), &mut out)));
 }
@@ -96,7 +102,7 @@ fn vcycle(bencher: Bencher, n: usize) {
 #[divan::bench(args = [64, 128, 256])]
 fn amg_values(bencher: Bencher, n: usize) {
     let sim = hang(n);
-    let s = sim.model.pin_filter();
+    let s = sim.model().pin_filter();
     let mut mg = Multigrid::default();
     mg.refresh(sim.matrix(), &s);
     bencher.bench_local(|| mg.refresh(divan::black_box(sim.matrix()), &s));
@@ -105,7 +111,7 @@ fn amg_values(bencher: Bencher, n: usize) {
 #[divan::bench(args = [64, 128])]
 fn pcg_solve(bencher: Bencher, n: usize) {
     let sim = hang(n);
-    let s = sim.model.pin_filter();
+    let s = sim.model().pin_filter();
     let a = sim.matrix();
     let b: Vec<Vec3> = sim
         .total_force()
@@ -137,13 +143,13 @@ fn broad_phase(bencher: Bencher, n: usize) {
     for _ in 0..Preset::Pile.warm_up_frames() {
         sim.step(H).unwrap();
     }
-    let x0 = sim.model.x.clone();
+    let x0 = sim.positions().to_vec();
     let x1: Vec<Vec3> = x0
         .iter()
-        .zip(&sim.model.v)
+        .zip(sim.model().velocities())
         .map(|(x, v)| *x + H * *v)
         .collect();
-    let (tris, edges) = (sim.model.triangles(), sim.model.edges());
+    let (tris, edges) = (sim.model().triangles(), sim.model().edges());
     bencher.bench_local(|| candidates(&x0, &x1, &tris, &edges, 0.005));
 }
 

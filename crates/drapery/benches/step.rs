@@ -53,7 +53,7 @@ fn main() {
             // the multigrid setup, measured apart on each step's matrix (its structure is
             // built on the first step, then only the values are refreshed)
             let mut mg = Multigrid::default();
-            let filter = sim.model.pin_filter();
+            let filter = sim.model().pin_filter();
             let (mut total, mut asm, mut sol, mut cg, mut setup) =
                 (vec![], vec![], vec![], vec![], vec![]);
             for _ in 0..steps {

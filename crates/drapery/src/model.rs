@@ -140,29 +140,48 @@ impl ClothInfo {
     }
 }
 
-/// Particles, springs and external-force parameters.
+/// Particles, springs and external-force parameters. Built and validated once by
+/// [`Model::new`] (and [`Model::with_collisions`]); read through its accessors. Only the state
+/// (positions, velocities) can change afterwards, through checked setters.
 #[derive(Clone, Debug)]
 pub struct Model {
     /// Positions, m.
-    pub x: Vec<Vec3>,
+    pub(crate) x: Vec<Vec3>,
     /// Velocities, m/s.
-    pub v: Vec<Vec3>,
+    pub(crate) v: Vec<Vec3>,
     /// Lumped masses, kg (all > 0).
-    pub mass: Vec<f64>,
+    pub(crate) mass: Vec<f64>,
     /// Pinned particles keep their position exactly.
-    pub pinned: Vec<bool>,
+    pub(crate) pinned: Vec<bool>,
     /// Linear air drag coefficient per particle, N·s/m.
-    pub drag: Vec<f64>,
+    pub(crate) drag: Vec<f64>,
     /// Springs.
-    pub springs: Springs,
+    pub(crate) springs: Springs,
     /// Gravitational acceleration, m/s².
-    pub gravity: Vec3,
+    pub(crate) gravity: Vec3,
     /// The cloths, in order.
-    pub cloths: Vec<ClothInfo>,
+    pub(crate) cloths: Vec<ClothInfo>,
     /// Collision handling; `None` turns collisions off (default: `None`).
-    pub collision: Option<crate::collision::settings::CollisionSettings>,
+    pub(crate) collision: Option<crate::collision::settings::CollisionSettings>,
     /// Obstacles (used when `collision` is set).
-    pub obstacles: Vec<crate::collision::settings::Obstacle>,
+    pub(crate) obstacles: Vec<crate::collision::settings::Obstacle>,
+}
+
+/// `values` has one finite entry per particle (`n`).
+pub(crate) fn check_state(field: &str, values: &[Vec3], n: usize) -> Result<()> {
+    if values.len() != n {
+        return Err(Error::field(
+            field,
+            format!("{} values given for {n} particles", values.len()),
+        ));
+    }
+    if let Some(i) = values.iter().position(|p| !p.is_finite()) {
+        return Err(Error::field(
+            field,
+            format!("particle {i} is not finite: {}", values[i]),
+        ));
+    }
+    Ok(())
 }
 
 impl Model {
@@ -345,6 +364,75 @@ impl Model {
             }
         }
         out
+    }
+
+    /// The same model with collisions on: `settings` (validated) and the obstacles.
+    pub fn with_collisions(
+        mut self,
+        settings: crate::collision::settings::CollisionSettings,
+        obstacles: Vec<crate::collision::settings::Obstacle>,
+    ) -> Result<Model> {
+        settings.validate()?;
+        self.collision = Some(settings);
+        self.obstacles = obstacles;
+        Ok(self)
+    }
+
+    /// Sets every particle's position; an error naming the field, changing nothing, unless
+    /// there is one finite value per particle.
+    pub fn set_positions(&mut self, x: &[Vec3]) -> Result<()> {
+        check_state("positions", x, self.x.len())?;
+        self.x.copy_from_slice(x);
+        Ok(())
+    }
+
+    /// Sets every particle's mass (kg, each a finite number > 0), replacing what the cloths'
+    /// densities or vertex masses gave: for hand-built systems (tests, a front end's own
+    /// lumping). An error naming the field, changing nothing, otherwise.
+    pub fn set_masses(&mut self, mass: &[f64]) -> Result<()> {
+        if mass.len() != self.mass.len() {
+            return Err(Error::field(
+                "masses",
+                format!(
+                    "{} values given for {} particles",
+                    mass.len(),
+                    self.mass.len()
+                ),
+            ));
+        }
+        for (i, &m) in mass.iter().enumerate() {
+            validate::positive(&format!("masses[{i}]"), m)?;
+        }
+        self.mass.copy_from_slice(mass);
+        Ok(())
+    }
+
+    /// Sets every spring's rest length (m, each a finite number ≥ 0: zero-length springs pull
+    /// their two particles together), replacing the lengths of the rest mesh. An error naming
+    /// the field, changing nothing, otherwise.
+    pub fn set_rest_lengths(&mut self, rest: &[f64]) -> Result<()> {
+        if rest.len() != self.springs.len() {
+            return Err(Error::field(
+                "springs.rest",
+                format!(
+                    "{} values given for {} springs",
+                    rest.len(),
+                    self.springs.len()
+                ),
+            ));
+        }
+        for (i, &r) in rest.iter().enumerate() {
+            validate::nonneg(&format!("springs.rest[{i}]"), r)?;
+        }
+        self.springs.rest.copy_from_slice(rest);
+        Ok(())
+    }
+
+    /// Sets every particle's velocity; as [`Model::set_positions`].
+    pub fn set_velocities(&mut self, v: &[Vec3]) -> Result<()> {
+        check_state("velocities", v, self.v.len())?;
+        self.v.copy_from_slice(v);
+        Ok(())
     }
 
     /// Positions, m.

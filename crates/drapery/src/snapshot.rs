@@ -17,8 +17,8 @@
 
 use crate::error::{Error, Result};
 use crate::fingerprint::Fnv;
-use crate::step::Simulation;
 use crate::math::Vec3;
+use crate::step::Simulation;
 
 /// The magic of the current layout.
 const MAGIC: &[u8] = b"DRAPERY-STATE-3\n";

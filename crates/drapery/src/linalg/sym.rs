@@ -212,7 +212,6 @@ fn rows_scalar(
     }
 }
 
-
 /// `mᵀ v`.
 #[inline]
 fn transpose_mul(m: &Mat3, v: Vec3) -> Vec3 {

@@ -56,16 +56,16 @@ use system::System;
 /// A model plus the solver's working memory. Advance it with [`Simulation::step`].
 pub struct Simulation {
     /// The simulated state (positions and velocities are updated in place).
-    pub model: Model,
+    pub(crate) model: Model,
     /// Step settings.
-    pub settings: SolverSettings,
+    pub(crate) settings: SolverSettings,
     /// Simulated time, s.
-    pub time: f64,
+    pub(crate) time: f64,
     /// Steps taken so far.
-    pub steps: u64,
+    pub(crate) steps: u64,
     /// The previous step's velocity change, the PCG's initial guess for the next step (part of
     /// the state: save and restore it to resume a run bit for bit).
-    pub warm_start: Vec<Vec3>,
+    pub(crate) warm_start: Vec<Vec3>,
     forces: Vec<Box<dyn Force>>,
     system: System,
     /// State the simulation was created in (the multigrid's reference, see [`Self::reference`]).
@@ -330,15 +330,40 @@ impl Simulation {
     /// changing nothing, when the length differs from the particle count or a value is not
     /// finite. Pinned particles move too: a pin holds a particle where it is.
     pub fn set_positions(&mut self, x: &[Vec3]) -> Result<()> {
-        check_state("positions", x, self.model.particle_count())?;
+        crate::model::check_state("positions", x, self.model.particle_count())?;
         self.model.x.copy_from_slice(x);
         Ok(())
     }
 
     /// Sets every particle's velocity; as [`Simulation::set_positions`].
     pub fn set_velocities(&mut self, v: &[Vec3]) -> Result<()> {
-        check_state("velocities", v, self.model.particle_count())?;
+        crate::model::check_state("velocities", v, self.model.particle_count())?;
         self.model.v.copy_from_slice(v);
+        Ok(())
+    }
+
+    /// Replaces the motion of obstacle `index` from now on (obstacles are posed at every
+    /// step from their motion, so this takes effect at the next step). An error when there is
+    /// no such obstacle or the motion is not finite.
+    pub fn set_obstacle_motion(
+        &mut self,
+        index: usize,
+        motion: crate::collision::colliders::RigidMotion,
+    ) -> Result<()> {
+        let n = self.model.obstacles.len();
+        let field = format!("collider[{index}]");
+        let Some(o) = self.model.obstacles.get_mut(index) else {
+            return Err(crate::Error::field(
+                field,
+                format!("no such collider: the scene has {n}"),
+            ));
+        };
+        crate::validate::finite3(&format!("{field}.velocity"), motion.velocity)?;
+        crate::validate::finite3(
+            &format!("{field}.angular_velocity"),
+            motion.angular_velocity,
+        )?;
+        o.collider.motion = motion;
         Ok(())
     }
 
@@ -407,23 +432,6 @@ impl Simulation {
     }
 }
 
-/// `values` has one finite entry per particle.
-fn check_state(field: &str, values: &[Vec3], n: usize) -> Result<()> {
-    if values.len() != n {
-        return Err(crate::Error::field(
-            field,
-            format!("{} values given for {n} particles", values.len()),
-        ));
-    }
-    if let Some(i) = values.iter().position(|p| !p.is_finite()) {
-        return Err(crate::Error::field(
-            field,
-            format!("particle {i} is not finite: {}", values[i]),
-        ));
-    }
-    Ok(())
-}
-
 /// The forces of a model: gravity, then springs and spring damping (the springs with a
 /// nonzero coefficient), then air drag if any particle has it.
 fn model_forces(model: &Model, settings: &SolverSettings) -> Vec<Box<dyn Force>> {
@@ -464,8 +472,8 @@ mod tests {
 
     #[test]
     fn the_state_can_be_set_between_steps_but_only_whole_and_finite() {
-        let mut sim = Simulation::new(testing::sheet(3, 0.5, vec![0]), SolverSettings::default())
-            .unwrap();
+        let mut sim =
+            Simulation::new(testing::sheet(3, 0.5, vec![0]), SolverSettings::default()).unwrap();
         let n = sim.positions().len();
         let e = sim.set_positions(&vec![Vec3::ZERO; n - 1]).unwrap_err();
         assert_eq!(e.to_string(), "positions: 8 values given for 9 particles");

@@ -63,13 +63,18 @@ fn sheet_on_sheet(normal: Vec3, offset: Vec3, velocity: Vec3, mu: f64) -> Simula
             initial_velocity: velocity,
         },
     ];
-    let mut model = Model::new(cloths, Vec3::new(0.0, -9.81, 0.0)).unwrap();
-    model.collision = Some(CollisionSettings {
-        thickness: THICKNESS,
-        self_collision: true,
-        friction: mu,
-        stiffness: 1000.0,
-    });
+    let model = Model::new(cloths, Vec3::new(0.0, -9.81, 0.0))
+        .unwrap()
+        .with_collisions(
+            CollisionSettings {
+                thickness: THICKNESS,
+                self_collision: true,
+                friction: mu,
+                stiffness: 1000.0,
+            },
+            vec![],
+        )
+        .unwrap();
     Simulation::new(
         model,
         SolverSettings {
@@ -82,12 +87,12 @@ fn sheet_on_sheet(normal: Vec3, offset: Vec3, velocity: Vec3, mu: f64) -> Simula
 
 /// Mass-weighted mean position and velocity of the free sheet.
 fn top_centre(s: &Simulation) -> (Vec3, Vec3) {
-    let c = &s.model.cloths[1];
+    let c = &s.model().cloths()[1];
     let (mut x, mut v, mut m) = (Vec3::ZERO, Vec3::ZERO, 0.0);
     for i in c.range() {
-        x += s.model.x[i] * s.model.mass[i];
-        v += s.model.v[i] * s.model.mass[i];
-        m += s.model.mass[i];
+        x += s.model().positions()[i] * s.model().masses()[i];
+        v += s.model().velocities()[i] * s.model().masses()[i];
+        m += s.model().masses()[i];
     }
     (x / m, v / m)
 }
@@ -95,11 +100,15 @@ fn top_centre(s: &Simulation) -> (Vec3, Vec3) {
 /// Steps, checking after each that nothing intersects; returns the free sheet's mean velocity
 /// after every step.
 fn run(s: &mut Simulation, steps: usize) -> Vec<Vec3> {
-    let tris = s.model.triangles();
+    let tris = s.model().triangles();
     (0..steps)
         .map(|k| {
             s.step(H).unwrap_or_else(|e| panic!("step {k}: {e}"));
-            assert_eq!(count_self_intersections(&s.model.x, &tris), 0, "step {k}");
+            assert_eq!(
+                count_self_intersections(s.model().positions(), &tris),
+                0,
+                "step {k}"
+            );
             top_centre(s).1
         })
         .collect()
@@ -187,7 +196,7 @@ fn sliding_with_friction_gives_the_same_bits_on_one_and_two_threads() {
             for _ in 0..10 {
                 s.step(H).unwrap();
             }
-            bits(s.model.x.iter().chain(&s.model.v))
+            bits(s.model().positions().iter().chain(s.model().velocities()))
         })
     };
     assert_eq!(run_on(1), run_on(2));

@@ -32,9 +32,10 @@ fn sim(
     obstacles: Vec<Obstacle>,
     collision: CollisionSettings,
 ) -> Simulation {
-    let mut model = Model::new(cloths, Vec3::new(0.0, -9.81, 0.0)).unwrap();
-    model.collision = Some(collision);
-    model.obstacles = obstacles;
+    let model = Model::new(cloths, Vec3::new(0.0, -9.81, 0.0))
+        .unwrap()
+        .with_collisions(collision, obstacles)
+        .unwrap();
     Simulation::new(
         model,
         SolverSettings {
@@ -58,8 +59,8 @@ fn ground(friction: f64) -> Obstacle {
 }
 
 fn colliders(s: &Simulation) -> Vec<Collider> {
-    s.model
-        .obstacles
+    s.model()
+        .obstacles()
         .iter()
         .map(|o| o.collider.clone())
         .collect()
@@ -68,17 +69,17 @@ fn colliders(s: &Simulation) -> Vec<Collider> {
 /// Runs `steps` steps of `h`, asserting after each that no cloth triangles intersect and no
 /// particle is inside an analytic obstacle.
 fn run_clean(s: &mut Simulation, steps: usize, h: f64) {
-    let tris = s.model.triangles();
+    let tris = s.model().triangles();
     for k in 0..steps {
         let r = s.step(h).unwrap_or_else(|e| panic!("step {k}: {e}"));
         let _ = r;
         assert_eq!(
-            count_self_intersections(&s.model.x, &tris),
+            count_self_intersections(s.model().positions(), &tris),
             0,
             "self-intersection after step {k}"
         );
         assert_eq!(
-            count_penetrations(&s.model.x, &colliders(s), s.time, 0.0),
+            count_penetrations(s.model().positions(), &colliders(s), s.time(), 0.0),
             0,
             "penetration after step {k}"
         );
@@ -111,13 +112,17 @@ fn a_sheet_drapes_over_a_sphere_without_penetrating_it() {
     );
     run_clean(&mut s, 90, 1.0 / 60.0);
     // the centre of the sheet rests on top of the sphere, about one thickness above it
-    let centre = s.model.x[10 * 21 + 10];
+    let centre = s.model().positions()[10 * 21 + 10];
     assert!(
         (centre.length() - 0.31).abs() < 0.01,
         "centre at {centre:?}"
     );
     // the corners hang below the top of the sphere
-    assert!(s.model.x[0].y < 0.1, "corner at {:?}", s.model.x[0]);
+    assert!(
+        s.model().positions()[0].y < 0.1,
+        "corner at {:?}",
+        s.model().positions()[0]
+    );
 }
 
 #[test]
@@ -153,7 +158,7 @@ fn a_fast_sheet_does_not_tunnel_through_a_zero_thickness_plate() {
         },
     );
     run_clean(&mut s, 30, 1.0 / 60.0);
-    for p in &s.model.x {
+    for p in s.model().positions() {
         assert!(p.y > 0.0, "a vertex went through the plate: {p:?}");
     }
 }
@@ -178,9 +183,14 @@ fn a_sheet_falling_on_the_ground_piles_up_without_intersecting_itself() {
         },
     );
     run_clean(&mut s, 120, 1.0 / 60.0);
-    let top = s.model.x.iter().map(|p| p.y).fold(f64::MIN, f64::max);
+    let top = s
+        .model()
+        .positions()
+        .iter()
+        .map(|p| p.y)
+        .fold(f64::MIN, f64::max);
     assert!(top < 0.2, "the sheet did not fall: top at {top}");
-    assert!(s.model.x.iter().all(|p| p.y > 0.0));
+    assert!(s.model().positions().iter().all(|p| p.y > 0.0));
 }
 
 #[test]
@@ -206,9 +216,9 @@ fn friction_holds_a_sheet_on_a_tilted_plane_and_without_it_the_sheet_slides() {
                 ..Default::default()
             },
         );
-        let x0 = s.model.x[40];
+        let x0 = s.model().positions()[40];
         run_clean(&mut s, 60, 1.0 / 60.0);
-        travel.push((s.model.x[40] - x0).length());
+        travel.push((s.model().positions()[40] - x0).length());
     }
     assert!(
         travel[0] < 0.01,
@@ -250,24 +260,29 @@ fn a_spinning_sphere_drags_the_sheet_around_by_friction() {
         },
     );
     run_clean(&mut s, 30, 1.0 / 60.0);
-    let cap: Vec<usize> = (0..s.model.x.len())
-        .filter(|&i| s.model.x[i].x.hypot(s.model.x[i].z) > 0.05)
+    let cap: Vec<usize> = (0..s.model().positions().len())
+        .filter(|&i| s.model().positions()[i].x.hypot(s.model().positions()[i].z) > 0.05)
         .collect();
     assert!(cap.len() >= 4);
     let before: Vec<f64> = cap
         .iter()
-        .map(|&i| s.model.x[i].z.atan2(s.model.x[i].x))
+        .map(|&i| s.model().positions()[i].z.atan2(s.model().positions()[i].x))
         .collect();
-    s.model.obstacles[0].collider.motion = RigidMotion {
-        velocity: Vec3::ZERO,
-        angular_velocity: Vec3::new(0.0, 1.5, 0.0),
-    };
+    s.set_obstacle_motion(
+        0,
+        RigidMotion {
+            velocity: Vec3::ZERO,
+            angular_velocity: Vec3::new(0.0, 1.5, 0.0),
+        },
+    )
+    .unwrap();
     run_clean(&mut s, 30, 1.0 / 60.0);
     let turn: f64 = cap
         .iter()
         .zip(&before)
         .map(|(&i, a)| {
-            (s.model.x[i].z.atan2(s.model.x[i].x) - a + std::f64::consts::PI)
+            (s.model().positions()[i].z.atan2(s.model().positions()[i].x) - a
+                + std::f64::consts::PI)
                 .rem_euclid(std::f64::consts::TAU)
                 - std::f64::consts::PI
         })
@@ -301,7 +316,11 @@ fn a_particle_moving_away_from_an_obstacle_is_not_held_by_it() {
     );
     s.step(0.01).unwrap();
     // thrown up at 2 m/s: after one step it rises by about 2 cm, with no adhesion
-    assert!(s.model.x.iter().all(|p| p.y > 0.02), "{:?}", s.model.x[12]);
+    assert!(
+        s.model().positions().iter().all(|p| p.y > 0.02),
+        "{:?}",
+        s.model().positions()[12]
+    );
 }
 
 #[test]
@@ -334,11 +353,11 @@ fn a_sheet_starting_deep_inside_a_sphere_is_pushed_out_without_blowing_up() {
         s.step(0.01).unwrap();
     }
     assert_eq!(
-        count_penetrations(&s.model.x, &colliders(&s), s.time, 0.0),
+        count_penetrations(s.model().positions(), &colliders(&s), s.time(), 0.0),
         0
     );
     // pushed out, not launched: nothing moves faster than a few m/s
-    assert!(s.model.v.iter().all(|v| v.length() < 3.0));
+    assert!(s.model().velocities().iter().all(|v| v.length() < 3.0));
 }
 
 #[test]
@@ -375,17 +394,17 @@ fn a_mesh_spinning_about_the_origin_of_its_file_carries_the_sheet_around_it() {
             ..Default::default()
         },
     );
-    let tris = s.model.triangles();
+    let tris = s.model().triangles();
     let h = 1.0 / 60.0;
     for k in 0..60 {
         s.step(h).unwrap_or_else(|e| panic!("step {k}: {e}"));
-        let c = &s.model.obstacles[0].collider;
+        let c = &s.model().obstacles()[0].collider;
         let posed: Vec<Vec3> = plate_vertices
             .iter()
-            .map(|&p| c.transform_point(p, s.time))
+            .map(|&p| c.transform_point(p, s.time()))
             .collect();
         assert_eq!(
-            count_intersections_between(&s.model.x, &tris, &posed, &plate_triangles),
+            count_intersections_between(s.model().positions(), &tris, &posed, &plate_triangles),
             0,
             "the sheet went through the plate at step {k}"
         );
@@ -394,8 +413,8 @@ fn a_mesh_spinning_about_the_origin_of_its_file_carries_the_sheet_around_it() {
             assert!((p.with_y(0.0).length() - q.with_y(0.0).length()).abs() < 1e-12);
         }
     }
-    let n = s.model.x.len() as f64;
-    let centre = s.model.x.iter().sum::<Vec3>() / n;
+    let n = s.model().positions().len() as f64;
+    let centre = s.model().positions().iter().sum::<Vec3>() / n;
     // turned by 1 rad about +y: angle atan2(z, x) went from 0 to -1 (less a little slip while
     // the sheet spun up), at the same radius and resting on the plate
     let angle = centre.z.atan2(centre.x);
@@ -427,12 +446,16 @@ fn a_sheet_resting_on_the_ground_under_upward_gravity_lifts_off_freely_in_one_so
         Vec3::ZERO,
     );
     cloth.material.air_drag = 0.0;
-    let mut model = Model::new(vec![cloth], Vec3::new(0.0, 9.81, 0.0)).unwrap();
-    model.collision = Some(CollisionSettings {
-        thickness,
-        ..Default::default()
-    });
-    model.obstacles = vec![ground];
+    let model = Model::new(vec![cloth], Vec3::new(0.0, 9.81, 0.0))
+        .unwrap()
+        .with_collisions(
+            CollisionSettings {
+                thickness,
+                ..Default::default()
+            },
+            vec![ground],
+        )
+        .unwrap();
     let mut s = Simulation::new(
         model,
         SolverSettings {
@@ -445,7 +468,7 @@ fn a_sheet_resting_on_the_ground_under_upward_gravity_lifts_off_freely_in_one_so
     let r = s.step(h).unwrap();
     assert_eq!(r.linear_solves, 1);
     assert_eq!(r.obstacle_contacts, 0);
-    for (p, v) in s.model.x.iter().zip(&s.model.v) {
+    for (p, v) in s.model().positions().iter().zip(s.model().velocities()) {
         // free fall upward: v = g h, y = thickness + g h² (the flat sheet has no internal force)
         assert!((v.y - 9.81 * h).abs() < 1e-6, "{v}");
         assert!((p.y - (thickness + 9.81 * h * h)).abs() < 1e-8, "{p}");

@@ -16,7 +16,7 @@ fn a_hanging_cloth_gives_identical_bits_on_one_and_two_threads() {
             for _ in 0..10 {
                 sim.step(1.0 / 60.0).unwrap();
             }
-            bits(&sim.model.x)
+            bits(sim.model().positions())
         })
     };
     assert_eq!(run(1), run(2));

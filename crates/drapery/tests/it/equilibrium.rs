@@ -49,7 +49,7 @@ fn a_hanging_chain_settles_to_weight_below_over_k_per_spring() {
         sim.step(0.01).unwrap();
     }
     for s in 0..n - 1 {
-        let len = (sim.model.x[s] - sim.model.x[s + 1]).length();
+        let len = (sim.model().positions()[s] - sim.model().positions()[s + 1]).length();
         let below = (n - 1 - s) as f64 * m * g;
         let expect = 0.1 + below / k;
         assert!((len - expect).abs() < 1e-9, "spring {s}: {len} vs {expect}");
@@ -73,10 +73,10 @@ fn a_cloth_pinned_at_two_corners_settles_with_pin_reactions_equal_to_its_weight(
         sim.step(0.01).unwrap();
     }
     let f = sim.total_force();
-    let weight = sim.model.total_mass() * sim.model.gravity;
+    let weight = sim.model().total_mass() * sim.model().gravity();
     let mut reaction = Vec3::ZERO;
     for (i, fi) in f.iter().enumerate() {
-        if sim.model.pinned[i] {
+        if sim.model().pins()[i] {
             reaction -= *fi;
         }
     }
@@ -93,5 +93,5 @@ fn a_cloth_pinned_at_two_corners_settles_with_pin_reactions_equal_to_its_weight(
         f[0].y,
         f[11].y
     );
-    assert!(sim.model.kinetic_energy() < 1e-10);
+    assert!(sim.model().kinetic_energy() < 1e-10);
 }

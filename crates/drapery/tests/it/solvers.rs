@@ -144,7 +144,7 @@ fn pcg_and_direct_agree_on_a_real_cloth_matrix_and_it_is_positive_definite() {
     let n = a.n();
     let mut rng = Lcg(3);
     let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
-    let s = sim.model.pin_filter();
+    let s = sim.model().pin_filter();
     let z = vec![Vec3::ZERO; n];
     let mut x = vec![Vec3::ZERO; n];
     let settings = PcgSettings {
@@ -194,7 +194,7 @@ fn block_jacobi_pcg_takes_fewer_iterations_than_plain_cg_on_a_64x64_cloth() {
     let n = a.n();
     let mut rng = Lcg(11);
     let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
-    let s = sim.model.pin_filter();
+    let s = sim.model().pin_filter();
     let z = vec![Vec3::ZERO; n];
     let mut iters = Vec::new();
     for p in [Preconditioner::Identity, Preconditioner::BlockJacobi] {

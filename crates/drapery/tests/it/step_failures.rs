@@ -83,7 +83,8 @@ fn damped_rod(position_jacobian: bool) -> Simulation {
 #[test]
 fn a_nearly_singular_damping_position_jacobian_trips_the_blow_up_test_and_the_state_is_kept() {
     let mut sim = damped_rod(true);
-    let (x0, v0) = (sim.model.x.clone(), sim.model.v.clone());
+    let (x0, v0) = (sim.positions().to_vec(), sim.velocities().to_vec());
+    let before = sim.snapshot();
     let err = sim.step(H).unwrap_err();
     let (step, time, why) = reason(err);
     assert_eq!((step, time), (0, 0.0));
@@ -105,10 +106,10 @@ fn a_nearly_singular_damping_position_jacobian_trips_the_blow_up_test_and_the_st
         "{ke1} vs {predicted}"
     );
     // transactional: the state is exactly the one before the step, and nothing advanced
-    assert_eq!(sim.model.x, x0);
-    assert_eq!(sim.model.v, v0);
-    assert_eq!((sim.steps, sim.time), (0, 0.0));
-    assert!(sim.warm_start.iter().all(|w| *w == Vec3::ZERO));
+    assert_eq!(sim.model().positions(), x0);
+    assert_eq!(sim.model().velocities(), v0);
+    assert_eq!((sim.steps(), sim.time()), (0, 0.0));
+    assert_eq!(sim.snapshot(), before);
     // so the same step fails again with the same message
     let (_, _, again) = reason(sim.step(H).unwrap_err());
     assert_eq!(again, why);
@@ -119,12 +120,14 @@ fn without_the_damping_position_jacobian_the_same_rod_steps_and_loses_energy() {
     // Baraff & Witkin's symmetric matrix (the default) is at least M: the step is bounded by
     // docs/MATH.md §1 and the damping only takes energy out.
     let mut sim = damped_rod(false);
-    let ke0 = sim.model.kinetic_energy();
+    let ke0 = sim.model().kinetic_energy();
     sim.step(H).unwrap();
-    let ke1 = sim.model.kinetic_energy();
+    let ke1 = sim.model().kinetic_energy();
     // at most the work of gravity over the step on top of what it had
     assert!(ke1 < ke0 + 0.5 * (H * 1.0).powi(2) * 2.0, "{ke0} -> {ke1}");
-    assert!(sim.model.v[1].y < 0.0 && sim.model.v[1].y > -H * 1.0 - 1e-12);
+    assert!(
+        sim.model().velocities()[1].y < 0.0 && sim.model().velocities()[1].y > -H * 1.0 - 1e-12
+    );
 }
 
 // "Not positive definite". A = M - h² K with h² k a power of two and a mass below half an ulp of
@@ -160,7 +163,7 @@ fn a_numerically_singular_matrix_is_reported_as_not_positive_definite_by_every_p
         Preconditioner::Multigrid,
     ] {
         let mut sim = pair(2f64.powi(-100), p, LinearSolver::Pcg);
-        let x0 = sim.model.x.clone();
+        let x0 = sim.positions().to_vec();
         let (step, _, why) = reason(sim.step(h).unwrap_err());
         assert_eq!(step, 0);
         assert!(
@@ -169,8 +172,11 @@ fn a_numerically_singular_matrix_is_reported_as_not_positive_definite_by_every_p
             ),
             "{p:?}: {why}"
         );
-        assert_eq!(sim.model.x, x0, "{p:?}");
-        assert!(sim.model.v.iter().all(|v| *v == Vec3::ZERO), "{p:?}");
+        assert_eq!(sim.model().positions(), x0, "{p:?}");
+        assert!(
+            sim.model().velocities().iter().all(|v| *v == Vec3::ZERO),
+            "{p:?}"
+        );
     }
 }
 
@@ -182,7 +188,7 @@ fn the_same_pair_with_a_mass_the_diagonal_can_hold_steps_as_a_free_fall() {
     for p in [Preconditioner::Identity, Preconditioner::Multigrid] {
         let mut sim = pair(0.25, p, LinearSolver::Pcg);
         sim.step(h).unwrap();
-        for v in &sim.model.v {
+        for v in sim.model().velocities() {
             assert!(
                 (*v - Vec3::new(-h, 0.0, 0.0)).length() < 1e-12,
                 "{p:?}: {v}"
@@ -205,5 +211,5 @@ fn sparse_cholesky_reports_the_same_singular_matrix_as_not_positive_definite() {
         why.starts_with("sparse Cholesky failed: the system matrix is not positive definite"),
         "{why}"
     );
-    assert!(sim.model.v.iter().all(|v| *v == Vec3::ZERO));
+    assert!(sim.model().velocities().iter().all(|v| *v == Vec3::ZERO));
 }

@@ -150,9 +150,9 @@ fn one_step_of_the_three_particle_cloth_equals_the_hand_assembled_dense_solve() 
         g,
     )
     .unwrap();
-    model.mass = masses.to_vec();
-    model.v = v0.clone();
-    model.springs.rest = vec![1.0, 1.0];
+    model.set_masses(&masses).unwrap();
+    model.set_velocities(&v0).unwrap();
+    model.set_rest_lengths(&[1.0, 1.0]).unwrap();
     let mut sim = Simulation::new(
         model,
         SolverSettings {
@@ -182,11 +182,11 @@ fn one_step_of_the_three_particle_cloth_equals_the_hand_assembled_dense_solve() 
     for i in 0..3 {
         let v1 = v0[i] + Vec3::new(dv[3 * i], dv[3 * i + 1], dv[3 * i + 2]);
         assert!(
-            (sim.model.v[i] - v1).length() < 1e-10,
+            (sim.model().velocities()[i] - v1).length() < 1e-10,
             "v{i}: {:?} vs {:?}",
-            sim.model.v[i],
+            sim.model().velocities()[i],
             v1
         );
-        assert!((sim.model.x[i] - (x[i] + h * v1)).length() < 1e-12);
+        assert!((sim.model().positions()[i] - (x[i] + h * v1)).length() < 1e-12);
     }
 }
