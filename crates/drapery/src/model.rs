@@ -184,6 +184,27 @@ pub(crate) fn check_state(field: &str, values: &[Vec3], n: usize) -> Result<()> 
     Ok(())
 }
 
+/// Copies `values` into `target` when there is one per item and each passes `check`.
+fn set_each(
+    field: &str,
+    items: &str,
+    target: &mut [f64],
+    values: &[f64],
+    check: fn(&str, f64) -> Result<f64>,
+) -> Result<()> {
+    if values.len() != target.len() {
+        return Err(Error::field(
+            field,
+            format!("{} values given for {} {items}", values.len(), target.len()),
+        ));
+    }
+    for (i, &v) in values.iter().enumerate() {
+        check(&format!("{field}[{i}]"), v)?;
+    }
+    target.copy_from_slice(values);
+    Ok(())
+}
+
 impl Model {
     /// Builds the model: validates every cloth, generates springs (stretch, shear, bend; a
     /// spring with zero stiffness and zero damping is left out), lumps masses and applies pins.
@@ -390,42 +411,14 @@ impl Model {
     /// densities or vertex masses gave: for hand-built systems (tests, a front end's own
     /// lumping). An error naming the field, changing nothing, otherwise.
     pub fn set_masses(&mut self, mass: &[f64]) -> Result<()> {
-        if mass.len() != self.mass.len() {
-            return Err(Error::field(
-                "masses",
-                format!(
-                    "{} values given for {} particles",
-                    mass.len(),
-                    self.mass.len()
-                ),
-            ));
-        }
-        for (i, &m) in mass.iter().enumerate() {
-            validate::positive(&format!("masses[{i}]"), m)?;
-        }
-        self.mass.copy_from_slice(mass);
-        Ok(())
+        set_each("masses", "particles", &mut self.mass, mass, validate::positive)
     }
 
     /// Sets every spring's rest length (m, each a finite number ≥ 0: zero-length springs pull
     /// their two particles together), replacing the lengths of the rest mesh. An error naming
     /// the field, changing nothing, otherwise.
     pub fn set_rest_lengths(&mut self, rest: &[f64]) -> Result<()> {
-        if rest.len() != self.springs.len() {
-            return Err(Error::field(
-                "springs.rest",
-                format!(
-                    "{} values given for {} springs",
-                    rest.len(),
-                    self.springs.len()
-                ),
-            ));
-        }
-        for (i, &r) in rest.iter().enumerate() {
-            validate::nonneg(&format!("springs.rest[{i}]"), r)?;
-        }
-        self.springs.rest.copy_from_slice(rest);
-        Ok(())
+        set_each("springs.rest", "springs", &mut self.springs.rest, rest, validate::nonneg)
     }
 
     /// Sets every particle's velocity; as [`Model::set_positions`].
