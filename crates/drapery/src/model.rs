@@ -565,4 +565,36 @@ mod tests {
                 .contains("vertex_mass")
         );
     }
+
+    #[test]
+    fn parameters_set_after_building_are_checked_and_all_or_nothing() {
+        let mut m = Model::new(vec![grid_cloth(MassSpec::PerVertex(0.01))], Vec3::ZERO).unwrap();
+        let n = m.particle_count();
+        let before = m.masses().to_vec();
+        let mut bad = vec![0.02; n];
+        bad[7] = -1.0;
+        let e = m.set_masses(&bad).unwrap_err().to_string();
+        assert_eq!(e, "masses[7]: must be a finite number > 0, got -1");
+        assert_eq!(m.masses(), &before[..]);
+        let e = m.set_masses(&[1.0]).unwrap_err().to_string();
+        assert_eq!(e, format!("masses: 1 values given for {n} particles"));
+        m.set_masses(&vec![0.02; n]).unwrap();
+        assert!((m.total_mass() - 0.02 * n as f64).abs() < 1e-15);
+        let s = m.springs().len();
+        let e = m.set_rest_lengths(&vec![f64::NAN; s]).unwrap_err().to_string();
+        assert!(e.starts_with("springs.rest[0]: must be a finite number ≥ 0"), "{e}");
+        m.set_rest_lengths(&vec![0.0; s]).unwrap();
+        assert!(m.springs().rest.iter().all(|&r| r == 0.0));
+        let e = m
+            .with_collisions(
+                crate::collision::settings::CollisionSettings {
+                    thickness: 0.0,
+                    ..Default::default()
+                },
+                vec![],
+            )
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("collision.thickness: must be"), "{e}");
+    }
 }
