@@ -18,8 +18,9 @@ use crate::collision::proximity::proximities;
 use crate::collision::repulsion::Penalty;
 use crate::collision::response::{self, ObstacleContact};
 use crate::error::{Error, Result};
-use crate::forces::pair_sum::PairSums;
-use crate::forces::{AirDrag, Force, Gravity, Linearization, Repulsions, SpringDamping, Springs};
+use crate::forces::{
+    AirDrag, Force, Gravity, Linearization, Repulsions, SpringDamping, Springs, State,
+};
 use crate::linalg::BlockMatrix;
 use crate::linalg::direct::DirectSolver;
 use crate::linalg::pcg::{self, PcgScratch, PcgSettings, Preconditioner};
@@ -215,7 +216,7 @@ impl Simulation {
                 rest: stiff.iter().map(|&k| s.rest[k]).collect(),
                 k: stiff.iter().map(|&k| s.stiffness[k]).collect(),
                 clamp_compression: true,
-                sums: PairSums::default(),
+                sums: Default::default(),
             }));
         }
         if !damped.is_empty() {
@@ -224,7 +225,7 @@ impl Simulation {
                 j: damped.iter().map(|&k| s.j[k]).collect(),
                 c: damped.iter().map(|&k| s.damping[k]).collect(),
                 position_jacobian: settings.damping_x_jacobian,
-                sums: PairSums::default(),
+                sums: Default::default(),
             }));
         }
         if model.drag.iter().any(|&c| c > 0.0) {
@@ -280,14 +281,22 @@ impl Simulation {
     pub fn total_force(&self) -> Vec<Vec3> {
         let mut f = vec![Vec3::ZERO; self.model.particle_count()];
         for force in &self.forces {
-            force.add_force(&self.model.x, &self.model.v, &mut f);
+            let at = State {
+                t: self.time,
+                x: &self.model.x,
+                v: &self.model.v,
+            };
+            force.add_force(&at, &mut f);
         }
         f
     }
 
     /// Potential energy (springs and gravity) at the current positions.
     pub fn potential_energy(&self) -> f64 {
-        self.forces.iter().map(|f| f.energy(&self.model.x)).sum()
+        self.forces
+            .iter()
+            .map(|f| f.energy(self.time, &self.model.x))
+            .sum()
     }
 
     /// Kinetic plus potential energy.
@@ -302,6 +311,7 @@ impl Simulation {
         let (x, v) = (self.model.x.clone(), self.model.v.clone());
         self.use_contact_pattern(None);
         let at = Linearization {
+            t: self.time,
             x: &x,
             v: &v,
             matrix: (-h * h, -h),
@@ -324,7 +334,7 @@ impl Simulation {
         }
         let mut r = self.base_matrix.clone();
         let (x, v) = &self.initial;
-        assemble_base(&self.model.mass, &self.forces, x, v, h, &mut r);
+        assemble_base(&self.model.mass, &self.forces, 0.0, x, v, h, &mut r);
         let pins = self.model.pin_filter();
         let mg = self.pcg.multigrid();
         mg.params.strength = MULTIGRID_STRENGTH;
@@ -387,7 +397,7 @@ impl Simulation {
         set_mass(&self.model.mass, base);
         let mut add = |force: &dyn Force, m: &mut BlockMatrix| match &mut vectors {
             Some((f, kw)) => force.add_linearization(at, f, m, kw),
-            None => force.add_jacobian(at.x, at.v, at.matrix.0, at.matrix.1, m),
+            None => force.add_jacobian(&at.state(), at.matrix.0, at.matrix.1, m),
         };
         for force in &self.forces {
             add(force.as_ref(), base);
@@ -435,6 +445,7 @@ impl Simulation {
         contact: Option<&Repulsions>,
     ) -> f64 {
         let x: Vec<Vec3> = x0.iter().zip(v).map(|(a, b)| *a + h * *b).collect();
+        let t = self.time + h;
         let inertia: f64 = self
             .model
             .mass
@@ -444,7 +455,10 @@ impl Simulation {
             .sum();
         inertia
             + all_forces(&self.forces, contact)
-                .map(|f| f.energy(&x) + h * f.dissipation(&x, v))
+                .map(|f| {
+                    let at = State { t, x: &x, v };
+                    f.energy(t, &x) + h * f.dissipation(&at)
+                })
                 .sum::<f64>()
     }
 
@@ -452,7 +466,7 @@ impl Simulation {
     /// the first force, whose work over a step the blow-up test allows for separately).
     fn stored_energy(&self, x: &[Vec3], contact: Option<&Repulsions>) -> f64 {
         all_forces(&self.forces[1..], contact)
-            .map(|f| f.energy(x))
+            .map(|f| f.energy(self.time, x))
             .sum()
     }
 
@@ -534,13 +548,15 @@ impl Simulation {
                 let mut stencils =
                     proximities(&x0, &self.triangles, &self.edges, &cand, c.thickness);
                 stencils.retain(|s| s.particles.iter().any(|&p| !self.model.pinned[p as usize]));
-                (!stencils.is_empty()).then(|| Repulsions {
-                    stencils,
-                    penalty: Penalty {
-                        thickness: c.thickness,
-                        stiffness: c.stiffness,
-                        tangential: false,
-                    },
+                (!stencils.is_empty()).then(|| {
+                    Repulsions::new(
+                        stencils,
+                        Penalty {
+                            thickness: c.thickness,
+                            stiffness: c.stiffness,
+                            tangential: false,
+                        },
+                    )
                 })
             }
             _ => None,
@@ -588,6 +604,7 @@ impl Simulation {
                     *kwi = Vec3::ZERO;
                 });
             let at = Linearization {
+                t: self.time + h,
                 x: &x,
                 v: &v,
                 matrix: (-h * h, -h),
@@ -933,6 +950,7 @@ impl Simulation {
 fn assemble_base(
     mass: &[f64],
     forces: &[Box<dyn Force>],
+    t: f64,
     x: &[Vec3],
     v: &[Vec3],
     h: f64,
@@ -940,7 +958,7 @@ fn assemble_base(
 ) {
     set_mass(mass, m);
     for f in forces {
-        f.add_jacobian(x, v, -h * h, -h, m);
+        f.add_jacobian(&State { t, x, v }, -h * h, -h, m);
     }
 }
 
