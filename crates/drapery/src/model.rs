@@ -411,14 +411,26 @@ impl Model {
     /// densities or vertex masses gave: for hand-built systems (tests, a front end's own
     /// lumping). An error naming the field, changing nothing, otherwise.
     pub fn set_masses(&mut self, mass: &[f64]) -> Result<()> {
-        set_each("masses", "particles", &mut self.mass, mass, validate::positive)
+        set_each(
+            "masses",
+            "particles",
+            &mut self.mass,
+            mass,
+            validate::positive,
+        )
     }
 
     /// Sets every spring's rest length (m, each a finite number ≥ 0: zero-length springs pull
     /// their two particles together), replacing the lengths of the rest mesh. An error naming
     /// the field, changing nothing, otherwise.
     pub fn set_rest_lengths(&mut self, rest: &[f64]) -> Result<()> {
-        set_each("springs.rest", "springs", &mut self.springs.rest, rest, validate::nonneg)
+        set_each(
+            "springs.rest",
+            "springs",
+            &mut self.springs.rest,
+            rest,
+            validate::nonneg,
+        )
     }
 
     /// Sets every particle's velocity; as [`Model::set_positions`].
@@ -581,8 +593,14 @@ mod tests {
         m.set_masses(&vec![0.02; n]).unwrap();
         assert!((m.total_mass() - 0.02 * n as f64).abs() < 1e-15);
         let s = m.springs().len();
-        let e = m.set_rest_lengths(&vec![f64::NAN; s]).unwrap_err().to_string();
-        assert!(e.starts_with("springs.rest[0]: must be a finite number ≥ 0"), "{e}");
+        let e = m
+            .set_rest_lengths(&vec![f64::NAN; s])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("springs.rest[0]: must be a finite number ≥ 0"),
+            "{e}"
+        );
         m.set_rest_lengths(&vec![0.0; s]).unwrap();
         assert!(m.springs().rest.iter().all(|&r| r == 0.0));
         let e = m

@@ -6,9 +6,8 @@
 //! it out of the matrix, and so does drapery unless `position_jacobian` is set (which then
 //! needs the direct solver's LU).
 
-use super::pair_sum::PairSums;
-use super::{Force, Linearization};
-use crate::linalg::BlockMatrix;
+use super::stencil::{Accumulate, Gather, Local, Pair, StencilForce};
+use super::{Linearization, State};
 use crate::math::{Mat3, Vec3, outer};
 
 /// Damping on a set of springs.
@@ -22,14 +21,17 @@ pub struct SpringDamping {
     pub c: Vec<f64>,
     /// Include `∂f/∂x` in the Jacobian (non-symmetric).
     pub position_jacobian: bool,
-    /// Gather lists for the parallel sums (build with `PairSums::default()`).
-    pub sums: PairSums,
+    /// Gather lists for the parallel sums (build with `Gather::default()`).
+    pub sums: Gather<Pair>,
 }
 
+/// `(n, ℓ, u)` of a spring: direction, length and relative velocity `v_i - v_j`.
+type Geometry = Option<(Vec3, f64, Vec3)>;
+
 impl SpringDamping {
-    /// Returns `(n, ℓ, u·n)` for spring `s`, or `None` when the spring has no length.
+    /// Returns `(n, ℓ, u)` for spring `s`, or `None` when the spring has no length.
     #[inline]
-    fn geom(&self, s: usize, x: &[Vec3], v: &[Vec3]) -> Option<(Vec3, f64, Vec3)> {
+    fn geom(&self, s: usize, x: &[Vec3], v: &[Vec3]) -> Geometry {
         let (i, j) = (self.i[s] as usize, self.j[s] as usize);
         let d = x[i] - x[j];
         let l = d.length();
@@ -49,7 +51,7 @@ impl SpringDamping {
     /// Block `(i, i)` of `a ∂f/∂x + b ∂f/∂v` for a spring of coefficient `c` with geometry
     /// `g` from [`Self::geom`] (the other blocks follow by ±).
     #[inline]
-    fn block_at(&self, g: Option<(Vec3, f64, Vec3)>, c: f64, a: f64, b: f64) -> Mat3 {
+    fn block_at(&self, g: Geometry, c: f64, a: f64, b: f64) -> Mat3 {
         let Some((n, l, u)) = g else {
             return Mat3::ZERO;
         };
@@ -60,91 +62,74 @@ impl SpringDamping {
         blk
     }
 
-    /// Block `(i, i)` of `a ∂f/∂x + b ∂f/∂v` for spring `s`.
-    #[inline]
-    fn block(&self, s: usize, x: &[Vec3], v: &[Vec3], a: f64, b: f64) -> Mat3 {
-        self.block_at(self.geom(s, x, v), self.c[s], a, b)
-    }
-
     /// Force on particle i of a spring of coefficient `c` with geometry `g`.
     #[inline]
-    fn force_at(g: Option<(Vec3, f64, Vec3)>, c: f64) -> Vec3 {
+    fn force_at(g: Geometry, c: f64) -> Vec3 {
         g.map_or(Vec3::ZERO, |(n, _, u)| -c * u.dot(n) * n)
     }
 
-    /// Whether `a ∂f/∂x + b ∂f/∂v` can be non-zero: without the position Jacobian, `b = 0`
-    /// leaves nothing (the product is then skipped: it would add only zeros).
-    fn has_jacobian(&self, a: f64, b: f64) -> bool {
-        b != 0.0 || (self.position_jacobian && a != 0.0)
+    /// `B (w_i - w_j)` for spring `s` with block `B`.
+    #[inline]
+    fn product(&self, s: usize, block: Mat3, w: &[Vec3]) -> Vec3 {
+        block * (w[self.i[s] as usize] - w[self.j[s] as usize])
     }
 }
 
-impl Force for SpringDamping {
-    fn name(&self) -> &'static str {
-        "spring damping"
+impl StencilForce for SpringDamping {
+    type Shape = Pair;
+    const NAME: &'static str = "spring damping";
+    fn gather(&self) -> &Gather<Pair> {
+        &self.sums
     }
-    fn dissipation(&self, x: &[Vec3], v: &[Vec3]) -> f64 {
-        (0..self.i.len())
-            .filter_map(|s| {
-                self.geom(s, x, v)
-                    .map(|(n, _, u)| 0.5 * self.c[s] * u.dot(n).powi(2))
-            })
-            .sum()
+    fn count(&self) -> usize {
+        self.i.len()
     }
-    fn add_force(&self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]) {
-        let force = |s: usize| Self::force_at(self.geom(s, x, v), self.c[s]);
-        self.sums.add_vectors(&self.i, &self.j, force, f);
+    fn particles(&self, s: usize) -> [u32; 2] {
+        [self.i[s], self.j[s]]
     }
-    fn add_pattern(&self, pairs: &mut Vec<(u32, u32)>) {
-        pairs.extend(self.i.iter().zip(&self.j).map(|(&a, &b)| (a, b)));
+    fn accumulate(&self) -> Accumulate {
+        Accumulate::Sum
     }
-    fn add_jacobian(&self, x: &[Vec3], v: &[Vec3], a: f64, b: f64, m: &mut BlockMatrix) {
-        self.sums
-            .add_blocks(&self.i, &self.j, |s| self.block(s, x, v, a, b), m);
+    fn local_dissipation(&self, s: usize, at: &State) -> f64 {
+        self.geom(s, at.x, at.v)
+            .map_or(0.0, |(n, _, u)| 0.5 * self.c[s] * u.dot(n).powi(2))
     }
-    fn add_jacobian_product(
-        &self,
-        x: &[Vec3],
-        v: &[Vec3],
-        a: f64,
-        b: f64,
-        w: &[Vec3],
-        out: &mut [Vec3],
-    ) {
-        if !self.has_jacobian(a, b) {
-            return;
-        }
-        let (i, j) = (&self.i, &self.j);
-        let product = |s: usize| self.block(s, x, v, a, b) * (w[i[s] as usize] - w[j[s] as usize]);
-        self.sums.add_vectors(i, j, product, out);
+    fn local_force(&self, s: usize, at: &State) -> Vec3 {
+        Self::force_at(self.geom(s, at.x, at.v), self.c[s])
+    }
+    /// Without the position Jacobian, `b = 0` leaves nothing.
+    fn has_jacobian(&self, a: f64, b: f64) -> bool {
+        b != 0.0 || (self.position_jacobian && a != 0.0)
+    }
+    fn local_jacobian(&self, s: usize, at: &State, a: f64, b: f64) -> Mat3 {
+        self.block_at(self.geom(s, at.x, at.v), self.c[s], a, b)
+    }
+    fn local_product(&self, s: usize, at: &State, a: f64, b: f64, w: &[Vec3]) -> Vec3 {
+        self.product(s, self.local_jacobian(s, at, a, b), w)
     }
     /// One geometry per spring for the force, the matrix block and the product.
-    fn add_linearization(
-        &self,
-        at: &Linearization,
-        f: &mut [Vec3],
-        m: &mut BlockMatrix,
-        out: &mut [Vec3],
-    ) {
-        let (i, j, x, v, w) = (&self.i, &self.j, at.x, at.v, at.w);
+    fn local(&self, s: usize, at: &Linearization, product: bool, matrix: bool) -> Local<Pair> {
+        let (g, c) = (self.geom(s, at.x, at.v), self.c[s]);
         let ((am, bm), (ap, bp)) = (at.matrix, at.product);
-        let with_product = self.has_jacobian(ap, bp);
-        let term = |s: usize| {
-            let (g, c) = (self.geom(s, x, v), self.c[s]);
-            let p = if with_product {
-                self.block_at(g, c, ap, bp) * (w[i[s] as usize] - w[j[s] as usize])
+        Local {
+            force: Self::force_at(g, c),
+            product: if product {
+                self.product(s, self.block_at(g, c, ap, bp), at.w)
             } else {
                 Vec3::ZERO
-            };
-            (Self::force_at(g, c), p, self.block_at(g, c, am, bm))
-        };
-        let out = with_product.then_some(out);
-        self.sums.add_linearization(i, j, term, f, out, m);
+            },
+            matrix: if matrix {
+                self.block_at(g, c, am, bm)
+            } else {
+                Mat3::ZERO
+            },
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use super::super::Force;
     use super::super::testing::*;
     use super::*;
     use proptest::prelude::*;
@@ -173,7 +158,7 @@ mod tests {
                         j: vec![1, 2, 0],
                         c,
                         position_jacobian: true,
-                        sums: PairSums::default(),
+                        sums: Gather::default(),
                     },
                 )
             })
@@ -212,7 +197,7 @@ mod tests {
             if collapse {
                 x[2] = x[0];
             }
-            let at = Linearization { x: &x, v: &v, matrix: (a, b), product: (b, product_b * a), w: &w };
+            let at = Linearization { t: T, x: &x, v: &v, matrix: (a, b), product: (b, product_b * a), w: &w };
             prop_assert!(linearization_is_bitwise_separate(&d, &at, &w));
         }
 
@@ -232,12 +217,12 @@ mod tests {
         #[test]
         fn damping_force_is_minus_the_velocity_gradient_of_the_dissipation((x, v, d) in config()) {
             let mut f = vec![Vec3::ZERO; 3];
-            d.add_force(&x, &v, &mut f);
+            d.add_force(&at(&x, &v), &mut f);
             let mut vp = v.clone();
             for i in 0..3 { for k in 0..3 {
                 let e = 1e-6;
-                vp[i][k] = v[i][k] + e; let p = d.dissipation(&x, &vp);
-                vp[i][k] = v[i][k] - e; let m = d.dissipation(&x, &vp);
+                vp[i][k] = v[i][k] + e; let p = d.dissipation(&at(&x, &vp));
+                vp[i][k] = v[i][k] - e; let m = d.dissipation(&at(&x, &vp));
                 vp[i][k] = v[i][k];
                 prop_assert!((-(p - m) / (2.0 * e) - f[i][k]).abs() < 1e-5 * (1.0 + f[i][k].abs()));
             }}
@@ -246,7 +231,7 @@ mod tests {
         #[test]
         fn damping_never_adds_energy((x, v, d) in config()) {
             let mut f = vec![Vec3::ZERO; 3];
-            d.add_force(&x, &v, &mut f);
+            d.add_force(&at(&x, &v), &mut f);
             let power: f64 = f.iter().zip(&v).map(|(a, b)| a.dot(*b)).sum();
             prop_assert!(power <= 1e-12);
         }

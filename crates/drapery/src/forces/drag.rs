@@ -1,6 +1,6 @@
 //! Linear air drag: `f_i = -c_i v_i`, `∂f_i/∂v_i = -c_i I`, dissipation `Ψ = ½ Σ c_i |v_i|²`.
 
-use super::Force;
+use super::{Force, State};
 use crate::linalg::BlockMatrix;
 use crate::math::{Mat3, Vec3};
 
@@ -15,33 +15,25 @@ impl Force for AirDrag {
     fn name(&self) -> &'static str {
         "air drag"
     }
-    fn dissipation(&self, _x: &[Vec3], v: &[Vec3]) -> f64 {
+    fn dissipation(&self, at: &State) -> f64 {
         self.c
             .iter()
-            .zip(v)
+            .zip(at.v)
             .map(|(c, v)| 0.5 * c * v.length_squared())
             .sum()
     }
-    fn add_force(&self, _x: &[Vec3], v: &[Vec3], f: &mut [Vec3]) {
-        for ((fi, c), vi) in f.iter_mut().zip(&self.c).zip(v) {
+    fn add_force(&self, at: &State, f: &mut [Vec3]) {
+        for ((fi, c), vi) in f.iter_mut().zip(&self.c).zip(at.v) {
             *fi -= *c * *vi;
         }
     }
-    fn add_jacobian(&self, _x: &[Vec3], _v: &[Vec3], _a: f64, b: f64, m: &mut BlockMatrix) {
+    fn add_jacobian(&self, _at: &State, _a: f64, b: f64, m: &mut BlockMatrix) {
         for (i, c) in self.c.iter().enumerate() {
             let k = m.diag_index(i);
             m.values[k] -= Mat3::from_diagonal(Vec3::splat(b * c));
         }
     }
-    fn add_jacobian_product(
-        &self,
-        _x: &[Vec3],
-        _v: &[Vec3],
-        _a: f64,
-        b: f64,
-        w: &[Vec3],
-        out: &mut [Vec3],
-    ) {
+    fn add_jacobian_product(&self, _at: &State, _a: f64, b: f64, w: &[Vec3], out: &mut [Vec3]) {
         for ((o, c), wi) in out.iter_mut().zip(&self.c).zip(w) {
             *o -= b * c * *wi;
         }

@@ -1,6 +1,6 @@
 //! Gravity: `f_i = m_i g`, energy `E = -Σ m_i g·x_i`, zero Jacobians.
 
-use super::Force;
+use super::{Force, State};
 use crate::linalg::BlockMatrix;
 use crate::math::Vec3;
 
@@ -24,7 +24,7 @@ impl Force for Gravity {
     fn name(&self) -> &'static str {
         "gravity"
     }
-    fn energy(&self, x: &[Vec3]) -> f64 {
+    fn energy(&self, _t: f64, x: &[Vec3]) -> f64 {
         -self
             .weight
             .iter()
@@ -32,22 +32,13 @@ impl Force for Gravity {
             .map(|(w, p)| w.dot(*p))
             .sum::<f64>()
     }
-    fn add_force(&self, _x: &[Vec3], _v: &[Vec3], f: &mut [Vec3]) {
+    fn add_force(&self, _at: &State, f: &mut [Vec3]) {
         for (fi, w) in f.iter_mut().zip(&self.weight) {
             *fi += *w;
         }
     }
-    fn add_jacobian(&self, _x: &[Vec3], _v: &[Vec3], _a: f64, _b: f64, _m: &mut BlockMatrix) {}
-    fn add_jacobian_product(
-        &self,
-        _x: &[Vec3],
-        _v: &[Vec3],
-        _a: f64,
-        _b: f64,
-        _w: &[Vec3],
-        _out: &mut [Vec3],
-    ) {
-    }
+    fn add_jacobian(&self, _at: &State, _a: f64, _b: f64, _m: &mut BlockMatrix) {}
+    fn add_jacobian_product(&self, _at: &State, _a: f64, _b: f64, _w: &[Vec3], _out: &mut [Vec3]) {}
 }
 
 #[cfg(test)]
@@ -60,7 +51,7 @@ mod tests {
         let g = Gravity::new(&[0.5, 2.0], Vec3::new(0.1, -9.81, 0.3));
         let x = [Vec3::new(1.0, 2.0, 3.0), Vec3::new(-1.0, 0.5, 0.0)];
         let mut f = vec![Vec3::ZERO; 2];
-        g.add_force(&x, &x, &mut f);
+        g.add_force(&at(&x, &x), &mut f);
         let fd = fd_gradient(&g, &x);
         for i in 0..2 {
             assert!((f[i] - fd[i]).length() < 1e-6);

@@ -1,15 +1,20 @@
 //! Forces, one file each, behind one trait.
 //!
-//! Convention (docs/MATH.md): `f(x, v)` is the force, `K = ∂f/∂x` and `D = ∂f/∂v` its Jacobians in
-//! 3×3 blocks. For a conservative force `f = -∇E` and `K = -∇²E`. Every force here is checked
-//! against central finite differences in its tests.
+//! Convention (docs/MATH.md §0): `f(t, x, v)` is the force, `K = ∂f/∂x` and `D = ∂f/∂v` its
+//! Jacobians in 3×3 blocks. For a conservative force `f = -∇E` and `K = -∇²E`. Every force here
+//! is checked against central finite differences in its tests.
+//!
+//! A force acting on small groups of particles (pairs, triangles, hinges, contact stencils)
+//! implements [`stencil::StencilForce`] instead of [`Force`]: it writes each stencil's local
+//! energy, forces and Jacobian blocks, and the gather of [`stencil`] sums them into the global
+//! vectors and matrix, deterministically and in parallel.
 
 pub mod damping;
 pub mod drag;
 pub mod gravity;
-pub mod pair_sum;
 pub mod repulsion;
 pub mod spring;
+pub mod stencil;
 
 pub use damping::SpringDamping;
 pub use drag::AirDrag;
@@ -20,41 +25,45 @@ pub use spring::Springs;
 use crate::linalg::BlockMatrix;
 use crate::math::Vec3;
 
+/// The time and state at which a force is evaluated.
+#[derive(Clone, Copy, Debug)]
+pub struct State<'a> {
+    /// Time, s.
+    pub t: f64,
+    /// Positions.
+    pub x: &'a [Vec3],
+    /// Velocities.
+    pub v: &'a [Vec3],
+}
+
 /// A force acting on the particles, with its Jacobians.
 pub trait Force: Send + Sync {
     /// Short name, for reports.
     fn name(&self) -> &'static str;
 
-    /// Potential energy `E(x)` (0 for forces with no potential).
-    fn energy(&self, _x: &[Vec3]) -> f64 {
+    /// Potential energy `E(t, x)` (0 for forces with no potential).
+    fn energy(&self, _t: f64, _x: &[Vec3]) -> f64 {
         0.0
     }
 
-    /// Dissipation potential `Ψ(x, v)` with `∂Ψ/∂v = -f` for forces linear in `v` (0 otherwise).
-    fn dissipation(&self, _x: &[Vec3], _v: &[Vec3]) -> f64 {
+    /// Dissipation potential `Ψ(t, x, v)` with `∂Ψ/∂v = -f` for forces linear in `v` (0
+    /// otherwise).
+    fn dissipation(&self, _at: &State) -> f64 {
         0.0
     }
 
-    /// `f += force(x, v)`.
-    fn add_force(&self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]);
+    /// `f += force(t, x, v)`.
+    fn add_force(&self, at: &State, f: &mut [Vec3]);
 
     /// Particle pairs whose off-diagonal blocks this force writes.
     fn add_pattern(&self, _pairs: &mut Vec<(u32, u32)>) {}
 
     /// `m += a ∂f/∂x + b ∂f/∂v` (the matrix form this force uses: for springs, with the
     /// compression clamp when enabled).
-    fn add_jacobian(&self, x: &[Vec3], v: &[Vec3], a: f64, b: f64, m: &mut BlockMatrix);
+    fn add_jacobian(&self, at: &State, a: f64, b: f64, m: &mut BlockMatrix);
 
     /// `out += (a ∂f/∂x + b ∂f/∂v) w`, with the same Jacobian as [`Force::add_jacobian`].
-    fn add_jacobian_product(
-        &self,
-        x: &[Vec3],
-        v: &[Vec3],
-        a: f64,
-        b: f64,
-        w: &[Vec3],
-        out: &mut [Vec3],
-    );
+    fn add_jacobian_product(&self, at: &State, a: f64, b: f64, w: &[Vec3], out: &mut [Vec3]);
 
     /// Everything a Newton iteration asks of the force at one point, in one call:
     /// [`Force::add_force`] into `f`, [`Force::add_jacobian`] with `at.matrix` into `m` and
@@ -75,6 +84,8 @@ pub trait Force: Send + Sync {
 /// Where and with which coefficients [`Force::add_linearization`] evaluates.
 #[derive(Clone, Copy, Debug)]
 pub struct Linearization<'a> {
+    /// Time, s.
+    pub t: f64,
     /// Positions.
     pub x: &'a [Vec3],
     /// Velocities.
@@ -87,6 +98,17 @@ pub struct Linearization<'a> {
     pub w: &'a [Vec3],
 }
 
+impl<'a> Linearization<'a> {
+    /// The time and state of the linearization point.
+    pub fn state(&self) -> State<'a> {
+        State {
+            t: self.t,
+            x: self.x,
+            v: self.v,
+        }
+    }
+}
+
 /// [`Force::add_linearization`] by the three separate calls.
 pub fn linearize_separately<F: Force + ?Sized>(
     force: &F,
@@ -95,10 +117,10 @@ pub fn linearize_separately<F: Force + ?Sized>(
     m: &mut BlockMatrix,
     out: &mut [Vec3],
 ) {
-    let (x, v) = (at.x, at.v);
-    force.add_force(x, v, f);
-    force.add_jacobian(x, v, at.matrix.0, at.matrix.1, m);
-    force.add_jacobian_product(x, v, at.product.0, at.product.1, at.w, out);
+    let state = at.state();
+    force.add_force(&state, f);
+    force.add_jacobian(&state, at.matrix.0, at.matrix.1, m);
+    force.add_jacobian_product(&state, at.product.0, at.product.1, at.w, out);
 }
 
 #[cfg(test)]

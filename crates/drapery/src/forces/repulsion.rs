@@ -6,11 +6,11 @@
 //! [`crate::collision::repulsion::repulsion`]. The tangential term is left out of the matrix
 //! (so `-K` stays positive semi-definite) but the force is exact.
 
-use super::Force;
+use super::stencil::{Full, Gather, Local, StencilForce};
+use super::{Linearization, State};
 use crate::collision::proximity::Proximity;
-use crate::collision::repulsion::{Penalty, repulsion};
-use crate::linalg::BlockMatrix;
-use crate::math::Vec3;
+use crate::collision::repulsion::{Penalty, Repulsion, repulsion};
+use crate::math::{Mat3, Vec3};
 
 /// A set of contact stencils sharing one penalty.
 #[derive(Clone, Debug)]
@@ -19,10 +19,22 @@ pub struct Repulsions {
     pub stencils: Vec<Proximity>,
     /// Thickness and stiffness (`tangential` is ignored: never in the matrix).
     pub penalty: Penalty,
+    /// Gather lists for the parallel sums (build with `Gather::default()`).
+    pub sums: Gather<Full<4>>,
 }
 
 impl Repulsions {
-    fn eval(&self, s: &Proximity, x: &[Vec3]) -> crate::collision::repulsion::Repulsion {
+    /// The repulsion of `stencils` under `penalty`.
+    pub fn new(stencils: Vec<Proximity>, penalty: Penalty) -> Self {
+        Repulsions {
+            stencils,
+            penalty,
+            sums: Gather::default(),
+        }
+    }
+
+    fn eval(&self, s: usize, x: &[Vec3]) -> Repulsion {
+        let s = &self.stencils[s];
         let p = s.particles.map(|i| x[i as usize]);
         repulsion(
             &p,
@@ -34,76 +46,72 @@ impl Repulsions {
             s.normal,
         )
     }
+
+    /// `a J w` on stencil `s`, for its Jacobian blocks `jac`.
+    fn product(&self, s: usize, jac: &[[Mat3; 4]; 4], a: f64, w: &[Vec3]) -> [Vec3; 4] {
+        let particles = &self.stencils[s].particles;
+        std::array::from_fn(|i| {
+            let mut y = Vec3::ZERO;
+            for (j, &q) in particles.iter().enumerate() {
+                y += jac[i][j] * w[q as usize];
+            }
+            a * y
+        })
+    }
 }
 
-impl Force for Repulsions {
-    fn name(&self) -> &'static str {
-        "contact repulsion"
+/// The stencil's Jacobian blocks times `a`.
+fn scaled(jac: &[[Mat3; 4]; 4], a: f64) -> [[Mat3; 4]; 4] {
+    jac.map(|row| row.map(|b| a * b))
+}
+
+/// Each particle and block takes the stencils' terms one by one ([`super::stencil::Accumulate::Each`]).
+impl StencilForce for Repulsions {
+    type Shape = Full<4>;
+    const NAME: &'static str = "contact repulsion";
+    fn gather(&self) -> &Gather<Full<4>> {
+        &self.sums
     }
-    fn energy(&self, x: &[Vec3]) -> f64 {
-        self.stencils.iter().map(|s| self.eval(s, x).energy).sum()
+    fn count(&self) -> usize {
+        self.stencils.len()
     }
-    fn add_force(&self, x: &[Vec3], _v: &[Vec3], f: &mut [Vec3]) {
-        for s in &self.stencils {
-            let r = self.eval(s, x);
-            for (a, &p) in s.particles.iter().enumerate() {
-                f[p as usize] += r.forces[a];
-            }
-        }
+    fn particles(&self, s: usize) -> [u32; 4] {
+        self.stencils[s].particles
     }
-    fn add_pattern(&self, pairs: &mut Vec<(u32, u32)>) {
-        for s in &self.stencils {
-            for a in 0..4 {
-                for b in a + 1..4 {
-                    pairs.push((s.particles[a], s.particles[b]));
-                }
-            }
-        }
+    fn local_energy(&self, s: usize, _t: f64, x: &[Vec3]) -> f64 {
+        self.eval(s, x).energy
     }
-    fn add_jacobian(&self, x: &[Vec3], _v: &[Vec3], a: f64, _b: f64, m: &mut BlockMatrix) {
-        if a == 0.0 {
-            return;
-        }
-        for s in &self.stencils {
-            let r = self.eval(s, x);
-            for (i, &p) in s.particles.iter().enumerate() {
-                for (j, &q) in s.particles.iter().enumerate() {
-                    m.add(p as usize, q as usize, a * r.jac[i][j]);
-                }
-            }
-        }
+    fn local_force(&self, s: usize, at: &State) -> [Vec3; 4] {
+        self.eval(s, at.x).forces
     }
-    fn add_jacobian_product(
-        &self,
-        x: &[Vec3],
-        _v: &[Vec3],
-        a: f64,
-        _b: f64,
-        w: &[Vec3],
-        out: &mut [Vec3],
-    ) {
-        if a == 0.0 {
-            return;
-        }
-        for s in &self.stencils {
-            let r = self.eval(s, x);
-            for (i, &p) in s.particles.iter().enumerate() {
-                let mut y = Vec3::ZERO;
-                for (j, &q) in s.particles.iter().enumerate() {
-                    y += r.jac[i][j] * w[q as usize];
-                }
-                out[p as usize] += a * y;
-            }
+    fn has_jacobian(&self, a: f64, _b: f64) -> bool {
+        a != 0.0
+    }
+    fn local_jacobian(&self, s: usize, at: &State, a: f64, _b: f64) -> [[Mat3; 4]; 4] {
+        scaled(&self.eval(s, at.x).jac, a)
+    }
+    fn local_product(&self, s: usize, at: &State, a: f64, _b: f64, w: &[Vec3]) -> [Vec3; 4] {
+        self.product(s, &self.eval(s, at.x).jac, a, w)
+    }
+    /// One penalty evaluation per stencil for the force, the product and the matrix.
+    fn local(&self, s: usize, at: &Linearization, _product: bool, _matrix: bool) -> Local<Full<4>> {
+        let r = self.eval(s, at.x);
+        Local {
+            force: r.forces,
+            product: self.product(s, &r.jac, at.product.0, at.w),
+            matrix: scaled(&r.jac, at.matrix.0),
         }
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use super::super::Force;
     use super::super::testing::*;
     use super::*;
     use crate::collision::proximity::StencilKind;
     use crate::collision::repulsion::{edge_edge_weights, point_triangle_weights};
+    use crate::linalg::BlockMatrix;
     use proptest::prelude::*;
 
     fn vec3(r: f64) -> impl Strategy<Value = Vec3> {
@@ -126,9 +134,9 @@ mod tests {
                 Proximity { kind: StencilKind::EdgeEdge, particles: [4, 5, 1, 2], weights: edge_edge_weights(s, t), dist: 0.0, normal: Vec3::Z },
             ];
             let penalty = Penalty { thickness: 0.05, stiffness: 300.0, tangential: false };
-            let rep = Repulsions { stencils: stencils.clone(), penalty };
+            let rep = Repulsions::new(stencils.clone(), penalty);
             let mut f = vec![Vec3::ZERO; 6];
-            rep.add_force(&x, &x, &mut f);
+            rep.add_force(&at(&x, &x), &mut f);
             let fd = fd_gradient(&rep, &x);
             let scale = f.iter().fold(1e-3f64, |m, v| m.max(v.length()));
             for i in 0..6 { prop_assert!((f[i] - fd[i]).length() < 1e-5 * scale); }

@@ -6,9 +6,8 @@
 //! `K_ij = K_ji = +H`. With `clamp_compression`, the matrix (never the force) uses
 //! `max(0, 1 - L/ℓ)` so that `-K` stays positive semi-definite (Choi & Ko 2002).
 
-use super::pair_sum::PairSums;
-use super::{Force, Linearization, linearize_separately};
-use crate::linalg::BlockMatrix;
+use super::stencil::{Accumulate, Gather, Local, Pair, StencilForce};
+use super::{Linearization, State};
 use crate::math::{Mat3, Vec3, outer};
 
 /// A set of springs.
@@ -24,8 +23,8 @@ pub struct Springs {
     pub k: Vec<f64>,
     /// Clamp the compressed transverse term in the matrix (default true).
     pub clamp_compression: bool,
-    /// Gather lists for the parallel sums (build with `PairSums::default()`).
-    pub sums: PairSums,
+    /// Gather lists for the parallel sums (build with `Gather::default()`).
+    pub sums: Gather<Pair>,
 }
 
 /// Below this length a spring has no direction: it exerts no force and no stiffness.
@@ -51,79 +50,60 @@ impl Springs {
         let h = k * (nn + t * (Mat3::IDENTITY - nn));
         (f, h)
     }
+
+    /// `-a H (w_i - w_j)` for spring `s` with Hessian block `h`.
+    #[inline]
+    fn product(&self, s: usize, h: Mat3, a: f64, w: &[Vec3]) -> Vec3 {
+        -a * (h * (w[self.i[s] as usize] - w[self.j[s] as usize]))
+    }
 }
 
-impl Force for Springs {
-    fn name(&self) -> &'static str {
-        "springs"
+impl StencilForce for Springs {
+    type Shape = Pair;
+    const NAME: &'static str = "springs";
+    fn gather(&self) -> &Gather<Pair> {
+        &self.sums
     }
-    fn energy(&self, x: &[Vec3]) -> f64 {
-        (0..self.i.len())
-            .map(|s| {
-                let l = (x[self.i[s] as usize] - x[self.j[s] as usize]).length();
-                0.5 * self.k[s] * (l - self.rest[s]).powi(2)
-            })
-            .sum()
+    fn count(&self) -> usize {
+        self.i.len()
     }
-    fn add_force(&self, x: &[Vec3], _v: &[Vec3], f: &mut [Vec3]) {
-        self.sums
-            .add_vectors(&self.i, &self.j, |s| self.eval(s, x).0, f);
+    fn particles(&self, s: usize) -> [u32; 2] {
+        [self.i[s], self.j[s]]
     }
-    fn add_pattern(&self, pairs: &mut Vec<(u32, u32)>) {
-        pairs.extend(self.i.iter().zip(&self.j).map(|(&a, &b)| (a, b)));
+    fn accumulate(&self) -> Accumulate {
+        Accumulate::Sum
     }
-    fn add_jacobian(&self, x: &[Vec3], _v: &[Vec3], a: f64, _b: f64, m: &mut BlockMatrix) {
-        if a == 0.0 {
-            return;
-        }
-        self.sums
-            .add_blocks(&self.i, &self.j, |s| -a * self.eval(s, x).1, m);
+    fn local_energy(&self, s: usize, _t: f64, x: &[Vec3]) -> f64 {
+        let l = (x[self.i[s] as usize] - x[self.j[s] as usize]).length();
+        0.5 * self.k[s] * (l - self.rest[s]).powi(2)
     }
-    fn add_jacobian_product(
-        &self,
-        x: &[Vec3],
-        _v: &[Vec3],
-        a: f64,
-        _b: f64,
-        w: &[Vec3],
-        out: &mut [Vec3],
-    ) {
-        if a == 0.0 {
-            return;
-        }
-        let (i, j) = (&self.i, &self.j);
-        self.sums.add_vectors(
-            i,
-            j,
-            |s| -a * (self.eval(s, x).1 * (w[i[s] as usize] - w[j[s] as usize])),
-            out,
-        );
+    fn local_force(&self, s: usize, at: &State) -> Vec3 {
+        self.eval(s, at.x).0
+    }
+    fn has_jacobian(&self, a: f64, _b: f64) -> bool {
+        a != 0.0
+    }
+    fn local_jacobian(&self, s: usize, at: &State, a: f64, _b: f64) -> Mat3 {
+        -a * self.eval(s, at.x).1
+    }
+    fn local_product(&self, s: usize, at: &State, a: f64, _b: f64, w: &[Vec3]) -> Vec3 {
+        self.product(s, self.eval(s, at.x).1, a, w)
     }
     /// One evaluation per spring: the force, `-a H` for the matrix and `-a H (w_i - w_j)` for
     /// the product come from the same `(f, H)`.
-    fn add_linearization(
-        &self,
-        at: &Linearization,
-        f: &mut [Vec3],
-        m: &mut BlockMatrix,
-        out: &mut [Vec3],
-    ) {
-        let (am, ap) = (at.matrix.0, at.product.0);
-        if am == 0.0 || ap == 0.0 {
-            return linearize_separately(self, at, f, m, out);
+    fn local(&self, s: usize, at: &Linearization, _product: bool, _matrix: bool) -> Local<Pair> {
+        let (g, h) = self.eval(s, at.x);
+        Local {
+            force: g,
+            product: self.product(s, h, at.product.0, at.w),
+            matrix: -at.matrix.0 * h,
         }
-        let (i, j, x, w) = (&self.i, &self.j, at.x, at.w);
-        let term = |s: usize| {
-            let (g, h) = self.eval(s, x);
-            let p = -ap * (h * (w[i[s] as usize] - w[j[s] as usize]));
-            (g, p, -am * h)
-        };
-        self.sums.add_linearization(i, j, term, f, Some(out), m);
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use super::super::Force;
     use super::super::testing::*;
     use super::*;
     use proptest::prelude::*;
@@ -148,7 +128,7 @@ mod tests {
                     rest: vec![],
                     k: vec![],
                     clamp_compression: false,
-                    sums: PairSums::default(),
+                    sums: Gather::default(),
                 };
                 for (p, &(a, b)) in pairs.iter().enumerate() {
                     let l = (x[a as usize] - x[b as usize]).length();
@@ -168,7 +148,7 @@ mod tests {
         #[test]
         fn spring_force_is_minus_energy_gradient((x, s) in config()) {
             let mut f = vec![Vec3::ZERO; 4];
-            s.add_force(&x, &x, &mut f);
+            s.add_force(&at(&x, &x), &mut f);
             let fd = fd_gradient(&s, &x);
             let scale = f.iter().fold(1.0f64, |m, v| m.max(v.length()));
             for i in 0..4 {
@@ -203,7 +183,7 @@ mod tests {
             if collapse {
                 x[3] = x[1];
             }
-            let at = Linearization { x: &x, v: &w, matrix: (a, b), product: (b, a), w: &w };
+            let at = Linearization { t: T, x: &x, v: &w, matrix: (a, b), product: (b, a), w: &w };
             prop_assert!(linearization_is_bitwise_separate(&s, &at, &w));
         }
 
@@ -229,7 +209,7 @@ mod tests {
             s.clamp_compression = true;
             let v = vec![Vec3::ZERO; 4];
             let mut kw = vec![Vec3::ZERO; 4];
-            s.add_jacobian_product(&x, &v, 1.0, 0.0, &w, &mut kw);
+            s.add_jacobian_product(&at(&x, &v), 1.0, 0.0, &w, &mut kw);
             let q: f64 = w.iter().zip(&kw).map(|(a, b)| a.dot(*b)).sum();
             prop_assert!(q <= 1e-9, "wᵀKw = {q}");
         }
@@ -244,12 +224,12 @@ mod tests {
             rest: vec![2.0],
             k: vec![10.0],
             clamp_compression: false,
-            sums: PairSums::default(),
+            sums: Gather::default(),
         };
         let x = [Vec3::ZERO, Vec3::X];
         let w = [Vec3::Y, -Vec3::Y];
         let mut kw = vec![Vec3::ZERO; 2];
-        s.add_jacobian_product(&x, &x, 1.0, 0.0, &w, &mut kw);
+        s.add_jacobian_product(&at(&x, &x), 1.0, 0.0, &w, &mut kw);
         let q: f64 = w.iter().zip(&kw).map(|(a, b)| a.dot(*b)).sum();
         assert!(q > 0.0);
     }

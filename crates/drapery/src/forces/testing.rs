@@ -3,6 +3,14 @@
 use super::*;
 use crate::math::Mat3;
 
+/// The time the force tests evaluate at (no force here depends on it yet).
+pub const T: f64 = 0.25;
+
+/// The state `(T, x, v)`.
+pub fn at<'a>(x: &'a [Vec3], v: &'a [Vec3]) -> State<'a> {
+    State { t: T, x, v }
+}
+
 /// Central-difference force `-∂E/∂x`.
 pub fn fd_gradient(force: &dyn Force, x: &[Vec3]) -> Vec<Vec3> {
     let mut g = vec![Vec3::ZERO; x.len()];
@@ -11,9 +19,9 @@ pub fn fd_gradient(force: &dyn Force, x: &[Vec3]) -> Vec<Vec3> {
         for d in 0..3 {
             let e = 1e-6 * (1.0 + x[i][d].abs());
             xp[i][d] = x[i][d] + e;
-            let ep = force.energy(&xp);
+            let ep = force.energy(T, &xp);
             xp[i][d] = x[i][d] - e;
-            let em = force.energy(&xp);
+            let em = force.energy(T, &xp);
             xp[i][d] = x[i][d];
             g[i][d] = -(ep - em) / (2.0 * e);
         }
@@ -37,7 +45,7 @@ pub fn fd_jacobian(force: &dyn Force, x: &[Vec3], v: &[Vec3], wrt_v: bool) -> Ve
                     xp[j][d] = base + delta;
                 }
                 let mut f = vec![Vec3::ZERO; n];
-                force.add_force(&xp, &vp, &mut f);
+                force.add_force(&at(&xp, &vp), &mut f);
                 if wrt_v {
                     vp[j][d] = base;
                 } else {
@@ -62,7 +70,7 @@ pub fn assembled(force: &dyn Force, x: &[Vec3], v: &[Vec3], a: f64, b: f64) -> V
     let mut pairs = Vec::new();
     force.add_pattern(&mut pairs);
     let mut m = BlockMatrix::from_pairs(x.len(), &pairs);
-    force.add_jacobian(x, v, a, b, &mut m);
+    force.add_jacobian(&at(x, v), a, b, &mut m);
     m.to_dense()
 }
 
@@ -84,7 +92,7 @@ pub fn rel_diff(got: &[Vec<f64>], reference: &[Vec<f64>]) -> f64 {
 pub fn check_product(force: &dyn Force, x: &[Vec3], v: &[Vec3], a: f64, b: f64, w: &[Vec3]) -> f64 {
     let dense = assembled(force, x, v, a, b);
     let mut out = vec![Vec3::ZERO; x.len()];
-    force.add_jacobian_product(x, v, a, b, w, &mut out);
+    force.add_jacobian_product(&at(x, v), a, b, w, &mut out);
     let wf: Vec<f64> = w.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
     let mut worst = 0.0f64;
     let mut scale = 1.0f64;
@@ -103,6 +111,7 @@ pub fn linearized(force: &dyn Force, x: &[Vec3], v: &[Vec3], a: f64, b: f64) -> 
     let mut m = BlockMatrix::from_pairs(x.len(), &pairs);
     let (mut f, mut out) = (vec![Vec3::ZERO; x.len()], vec![Vec3::ZERO; x.len()]);
     let at = Linearization {
+        t: T,
         x,
         v,
         matrix: (a, b),

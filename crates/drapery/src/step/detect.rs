@@ -48,13 +48,15 @@ pub(crate) fn contacts(
         let cand = candidates(x0, x0, triangles, edges, c.thickness);
         let mut stencils = proximities(x0, triangles, edges, &cand, c.thickness);
         stencils.retain(|s| s.particles.iter().any(|&p| !model.pinned[p as usize]));
-        (!stencils.is_empty()).then(|| Repulsions {
-            stencils,
-            penalty: Penalty {
-                thickness: c.thickness,
-                stiffness: c.stiffness,
-                tangential: false,
-            },
+        (!stencils.is_empty()).then(|| {
+            Repulsions::new(
+                stencils,
+                Penalty {
+                    thickness: c.thickness,
+                    stiffness: c.stiffness,
+                    tangential: false,
+                },
+            )
         })
     } else {
         None

@@ -21,6 +21,8 @@ const PARTICLES: usize = 1024;
 
 /// Where a Newton iteration linearizes.
 pub(crate) struct Iterate<'a> {
+    /// End of the step, s: the time the forces are evaluated at (backward Euler).
+    pub t1: f64,
     /// Start of the step.
     pub x0: &'a [Vec3],
     /// Start of the step.
@@ -77,6 +79,7 @@ pub(crate) fn run(
             *kwi = Vec3::ZERO;
         });
     let at = Linearization {
+        t: it.t1,
         x,
         v,
         matrix: (-h * h, -h),
@@ -105,6 +108,7 @@ mod tests {
         let mut out = Linearized::default();
         out.resize(n);
         let it = Iterate {
+            t1: h,
             x0: &m.x,
             v0: &m.v,
             x: &m.x,
@@ -115,9 +119,14 @@ mod tests {
         // independently: f and K v from the forces' own calls
         let mut f = vec![Vec3::ZERO; n];
         let mut kv = vec![Vec3::ZERO; n];
+        let at = crate::forces::State {
+            t: h,
+            x: &m.x,
+            v: &m.v,
+        };
         for force in &forces {
-            force.add_force(&m.x, &m.v, &mut f);
-            force.add_jacobian_product(&m.x, &m.v, 1.0, 0.0, &m.v, &mut kv);
+            force.add_force(&at, &mut f);
+            force.add_jacobian_product(&at, 1.0, 0.0, &m.v, &mut kv);
         }
         for i in 0..n {
             let want = h * (f[i] + h * kv[i]);
@@ -132,7 +141,7 @@ mod tests {
         sys.matrix().mul_vec(&m.v, &mut av);
         let mut dk = vec![Vec3::ZERO; n];
         for force in &forces {
-            force.add_jacobian_product(&m.x, &m.v, -h * h, -h, &m.v, &mut dk);
+            force.add_jacobian_product(&at, -h * h, -h, &m.v, &mut dk);
         }
         for i in 0..n {
             let want = m.mass[i] * m.v[i] + dk[i];

@@ -40,8 +40,7 @@ pub use settings::{LinearSolver, SolverSettings};
 
 use crate::constraints::obstacle::ActiveSet;
 use crate::error::Result;
-use crate::forces::pair_sum::PairSums;
-use crate::forces::{AirDrag, Force, Gravity, Linearization, SpringDamping, Springs};
+use crate::forces::{AirDrag, Force, Gravity, Linearization, SpringDamping, Springs, State};
 use crate::linalg::BlockMatrix;
 use crate::linalg::pcg::Preconditioner;
 use crate::math::Vec3;
@@ -162,6 +161,7 @@ impl Simulation {
         let gh = self.model.gravity.length() * h;
         let newton = self.settings.newton_iterations;
         let potential = Potential {
+            t0: self.time,
             mass: &self.model.mass,
             forces: &self.forces,
             contact: repulsions,
@@ -172,6 +172,7 @@ impl Simulation {
         for it in 0..newton {
             timed(&mut report.stages.linearize, || {
                 let iterate = Iterate {
+                    t1: self.time + h,
                     x0: &start.x0,
                     v0: &start.v0,
                     x: &x,
@@ -289,7 +290,7 @@ impl Simulation {
         }
         let mut r = self.system.base_pattern();
         let (x, v) = &self.initial;
-        system::assemble_base(&self.model.mass, &self.forces, x, v, h, &mut r);
+        system::assemble_base(&self.model.mass, &self.forces, 0.0, x, v, h, &mut r);
         let pins = crate::constraints::pins::filter(&self.model.pinned);
         let mg = self.solvers.pcg.multigrid();
         mg.params.strength = MULTIGRID_STRENGTH;
@@ -381,14 +382,22 @@ impl Simulation {
     pub fn total_force(&self) -> Vec<Vec3> {
         let mut f = vec![Vec3::ZERO; self.model.particle_count()];
         for force in &self.forces {
-            force.add_force(&self.model.x, &self.model.v, &mut f);
+            let at = State {
+                t: self.time,
+                x: &self.model.x,
+                v: &self.model.v,
+            };
+            force.add_force(&at, &mut f);
         }
         f
     }
 
     /// Potential energy (springs and gravity) at the current positions.
     pub fn potential_energy(&self) -> f64 {
-        self.forces.iter().map(|f| f.energy(&self.model.x)).sum()
+        self.forces
+            .iter()
+            .map(|f| f.energy(self.time, &self.model.x))
+            .sum()
     }
 
     /// Kinetic plus potential energy.
@@ -403,6 +412,7 @@ impl Simulation {
         let (x, v) = (&self.model.x, &self.model.v);
         self.system.use_contacts(None);
         let at = Linearization {
+            t: self.time,
             x,
             v,
             matrix: (-h * h, -h),
@@ -446,7 +456,7 @@ fn model_forces(model: &Model, settings: &SolverSettings) -> Vec<Box<dyn Force>>
             rest: stiff.iter().map(|&k| s.rest[k]).collect(),
             k: stiff.iter().map(|&k| s.stiffness[k]).collect(),
             clamp_compression: true,
-            sums: PairSums::default(),
+            sums: Default::default(),
         }));
     }
     if !damped.is_empty() {
@@ -455,7 +465,7 @@ fn model_forces(model: &Model, settings: &SolverSettings) -> Vec<Box<dyn Force>>
             j: damped.iter().map(|&k| s.j[k]).collect(),
             c: damped.iter().map(|&k| s.damping[k]).collect(),
             position_jacobian: settings.damping_x_jacobian,
-            sums: PairSums::default(),
+            sums: Default::default(),
         }));
     }
     if model.drag.iter().any(|&c| c > 0.0) {

@@ -6,7 +6,7 @@
 //! potential of damping and drag; docs/MATH.md §10). The first iteration is the linearized step;
 //! each one halves its step along the solved direction until `Φ` does not increase.
 
-use crate::forces::{Force, Repulsions};
+use crate::forces::{Force, Repulsions, State};
 use crate::math::Vec3;
 
 /// What the update found.
@@ -32,6 +32,8 @@ pub(crate) fn all_forces<'a>(
 
 /// The forces of a step and where it started.
 pub(crate) struct Potential<'a> {
+    /// Start of the step, s.
+    pub t0: f64,
     /// Particle masses.
     pub mass: &'a [f64],
     /// The model's forces.
@@ -49,7 +51,7 @@ pub(crate) struct Potential<'a> {
 impl Potential<'_> {
     /// `Φ(v)` of the module docs.
     pub fn objective(&self, v: &[Vec3]) -> f64 {
-        let h = self.h;
+        let (h, t) = (self.h, self.t0 + self.h);
         let x: Vec<Vec3> = self.x0.iter().zip(v).map(|(a, b)| *a + h * *b).collect();
         let inertia: f64 = self
             .mass
@@ -59,7 +61,10 @@ impl Potential<'_> {
             .sum();
         inertia
             + all_forces(self.forces, self.contact)
-                .map(|f| f.energy(&x) + h * f.dissipation(&x, v))
+                .map(|f| {
+                    let at = State { t, x: &x, v };
+                    f.energy(t, &x) + h * f.dissipation(&at)
+                })
                 .sum::<f64>()
     }
 
@@ -68,7 +73,7 @@ impl Potential<'_> {
     /// separately).
     pub fn stored_energy(&self, x: &[Vec3]) -> f64 {
         all_forces(&self.forces[1..], self.contact)
-            .map(|f| f.energy(x))
+            .map(|f| f.energy(self.t0, x))
             .sum()
     }
 }
@@ -131,6 +136,7 @@ mod tests {
 
     fn potential<'a>(x0: &'a [Vec3], v0: &'a [Vec3], mass: &'a [f64]) -> Potential<'a> {
         Potential {
+            t0: 0.0,
             mass,
             forces: &[],
             contact: None,

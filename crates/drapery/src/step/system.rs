@@ -124,7 +124,7 @@ impl System {
         set_mass(mass, base);
         let mut add = |force: &dyn Force, m: &mut BlockMatrix| match &mut vectors {
             Some((f, kw)) => force.add_linearization(at, f, m, kw),
-            None => force.add_jacobian(at.x, at.v, at.matrix.0, at.matrix.1, m),
+            None => force.add_jacobian(&at.state(), at.matrix.0, at.matrix.1, m),
         };
         for force in forces {
             add(force.as_ref(), base);
@@ -150,14 +150,16 @@ impl System {
 pub(crate) fn assemble_base(
     mass: &[f64],
     forces: &[Box<dyn Force>],
+    t: f64,
     x: &[Vec3],
     v: &[Vec3],
     h: f64,
     m: &mut BlockMatrix,
 ) {
     set_mass(mass, m);
+    let at = crate::forces::State { t, x, v };
     for f in forces {
-        f.add_jacobian(x, v, -h * h, -h, m);
+        f.add_jacobian(&at, -h * h, -h, m);
     }
 }
 
@@ -179,20 +181,20 @@ mod tests {
         let (a, b, c, d) = (0u32, 1, 5, 24);
         x[a as usize] = x[c as usize] + Vec3::new(0.0, 0.001, 0.0);
         x[b as usize] = x[d as usize] + Vec3::new(0.0, 0.001, 0.0);
-        Repulsions {
-            stencils: vec![Proximity {
+        Repulsions::new(
+            vec![Proximity {
                 kind: StencilKind::EdgeEdge,
                 particles: [a, b, c, d],
                 weights: [0.5, 0.5, -0.5, -0.5],
                 dist: 0.001,
                 normal: Vec3::Y,
             }],
-            penalty: Penalty {
+            Penalty {
                 thickness: 0.005,
                 stiffness: 1000.0,
                 tangential: false,
             },
-        }
+        )
     }
 
     #[test]
@@ -203,6 +205,7 @@ mod tests {
         let forces = super::super::model_forces(&m, &SolverSettings::default());
         let h = 0.01;
         let at = Linearization {
+            t: 0.0,
             x: &m.x,
             v: &m.v,
             matrix: (-h * h, -h),
@@ -220,7 +223,7 @@ mod tests {
             r.add_pattern(&mut p);
             p
         });
-        r.add_jacobian(&m.x, &m.v, -h * h, -h, &mut only);
+        r.add_jacobian(&at.state(), -h * h, -h, &mut only);
         let only = only.to_dense();
         let full = sys.matrix().to_dense();
         let pre = sys.preconditioner().to_dense();

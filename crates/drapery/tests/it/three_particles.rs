@@ -1,7 +1,7 @@
 //! The seeds' 3-particle cloth (docs/MATH.md §6): assembly, signs and the solve checked by hand.
 
 use crate::common::*;
-use drapery::forces::{Force, Springs};
+use drapery::forces::{Force, Springs, State};
 use drapery::linalg::BlockMatrix;
 use drapery::math::{Mat3, Vec3};
 use drapery::mesh::Mesh;
@@ -30,11 +30,16 @@ fn springs(clamp: bool) -> Springs {
     }
 }
 
+/// The state at positions `x` (and velocities `x`: springs do not read them).
+fn at(x: &[Vec3]) -> State<'_> {
+    State { t: 0.0, x, v: x }
+}
+
 fn assemble(s: &Springs, x: &[Vec3]) -> BlockMatrix {
     let mut pairs = Vec::new();
     s.add_pattern(&mut pairs);
     let mut m = BlockMatrix::from_pairs(3, &pairs);
-    s.add_jacobian(x, x, 1.0, 0.0, &mut m);
+    s.add_jacobian(&at(x), 1.0, 0.0, &mut m);
     m
 }
 
@@ -42,7 +47,7 @@ fn assemble(s: &Springs, x: &[Vec3]) -> BlockMatrix {
 fn three_particle_forces_match_hand_values() {
     let x = positions();
     let mut f = vec![Vec3::ZERO; 3];
-    springs(true).add_force(&x, &x, &mut f);
+    springs(true).add_force(&at(&x), &mut f);
     // f0 = -k (ℓ - L) n with n = (x0 - x1)/ℓ = -x̂: pulls 0 toward 1.
     assert!((f[0] - Vec3::new(0.2 * K, 0.0, 0.0)).length() < 1e-12);
     // spring 1-2 compressed by 0.5 pushes 1 up (+y) and 2 down.
@@ -100,10 +105,10 @@ fn unclamped_three_particle_matrix_is_the_central_difference_of_the_force() {
         let mut xp = x.clone();
         xp[j / 3][j % 3] += e;
         let mut fp = vec![Vec3::ZERO; 3];
-        s.add_force(&xp, &xp, &mut fp);
+        s.add_force(&at(&xp), &mut fp);
         xp[j / 3][j % 3] -= 2.0 * e;
         let mut fm = vec![Vec3::ZERO; 3];
-        s.add_force(&xp, &xp, &mut fm);
+        s.add_force(&at(&xp), &mut fm);
         for i in 0..9 {
             let fd = (fp[i / 3][i % 3] - fm[i / 3][i % 3]) / (2.0 * e);
             assert!(
@@ -166,7 +171,7 @@ fn one_step_of_the_three_particle_cloth_equals_the_hand_assembled_dense_solve() 
     // By hand: A = M - h² K (K clamped), b = h (f + h K v0).
     let kd = assemble(&springs(true), &x).to_dense();
     let mut f = vec![Vec3::ZERO; 3];
-    springs(true).add_force(&x, &x, &mut f);
+    springs(true).add_force(&at(&x), &mut f);
     let v0f = flat(&v0);
     let mut a = vec![vec![0.0; 9]; 9];
     let mut b = vec![0.0; 9];
