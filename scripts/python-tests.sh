@@ -9,13 +9,14 @@
 # - The package is installed the way a user installs it, `pip install ./crates/drapery-py`
 #   (maturin builds the extension in release mode into the workspace's target/).
 # - The tests compare with the drapery command's output, so target/release/drapery is built
-#   first (`cargo build --release -p drapery-cli`; nothing to do after `cargo build --release`).
-#   They find it through $DRAPERY_BIN.
+#   first (`cargo build --release --workspace`, as .ci/run does just before: then nothing to
+#   do). They find it through $DRAPERY_BIN ($CARGO_TARGET_DIR/release/drapery when set).
 # - Fails when pytest fails or collects no test (its exit code 5).
 set -euo pipefail
 
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
+target=${CARGO_TARGET_DIR:-$root/target}
 venv=${DRAPERY_PY_VENV:-$root/target/py-venv}
 python=${PYTHON:-python3}
 
@@ -29,11 +30,11 @@ export PATH="$venv/bin:$PATH"
 pip=("$venv/bin/python" -m pip --disable-pip-version-check --quiet)
 "${pip[@]}" install --upgrade "pip>=23" "maturin>=1.9.4,<2" numpy pytest
 
-cargo build --release -p drapery-cli --quiet
+cargo build --release --workspace --quiet
 echo "python-tests: building and installing crates/drapery-py" >&2
 "${pip[@]}" install --force-reinstall --no-deps --no-build-isolation ./crates/drapery-py
 
-export DRAPERY_BIN="$root/target/release/drapery"
+export DRAPERY_BIN="$target/release/drapery"
 status=0
 # From the tests' folder, so that `import drapery` is the installed package.
 (cd crates/drapery-py/tests && "$venv/bin/python" -m pytest -q -p no:cacheprovider "$@") || status=$?
