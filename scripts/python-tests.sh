@@ -5,7 +5,8 @@
 #   scripts/python-tests.sh [PYTEST ARGS...]
 #
 # - The virtual environment is $DRAPERY_PY_VENV (default target/py-venv), created on first use
-#   with python3 (or $PYTHON); maturin, numpy and pytest come from PyPI.
+#   with python3 (or $PYTHON); maturin, numpy, pytest and mypy (its stubtest checks the type
+#   stubs against the module) come from PyPI.
 # - The package is installed the way a user installs it, `pip install ./crates/drapery-py`
 #   (maturin builds the extension in release mode into the workspace's target/).
 # - The tests compare with the drapery command's output, so target/release/drapery is built
@@ -28,7 +29,7 @@ fi
 # maturin (the build backend, used without build isolation) from the venv
 export PATH="$venv/bin:$PATH"
 pip=("$venv/bin/python" -m pip --disable-pip-version-check --quiet)
-"${pip[@]}" install --upgrade "pip>=23" "maturin>=1.9.4,<2" numpy pytest
+"${pip[@]}" install --upgrade "pip>=23" "maturin>=1.9.4,<2" numpy pytest mypy
 
 cargo build --release --workspace --quiet
 echo "python-tests: building and installing crates/drapery-py" >&2

@@ -71,3 +71,15 @@ def test_the_commands_state_file_continues_to_the_commands_frames(tmp_path, drap
     sim.advance(scene.frame_count - 6)
     last = read_ply_positions(full / f"frame_{scene.frame_count:05d}.ply")
     assert sim.positions().tobytes() == last.tobytes()
+
+
+def test_a_dict_scenes_state_loads_into_the_same_dict_written_in_another_key_order(hang_dict):
+    sim = drapery.Simulation(drapery.Scene.from_dict(hang_dict))
+    sim.advance(2)
+    reordered = {k: hang_dict[k] for k in reversed(list(hang_dict))}
+    reordered["cloth"] = [{k: v for k, v in reversed(list(hang_dict["cloth"][0].items()))}]
+    again = drapery.Simulation.from_state(drapery.Scene.from_dict(reordered), sim.save_state())
+    assert again.positions().tobytes() == sim.positions().tobytes()
+    hang_dict["cloth"][0]["density"] = 0.2
+    with pytest.raises(drapery.StateError, match="another scene"):
+        drapery.Simulation.from_state(drapery.Scene.from_dict(hang_dict), sim.save_state())

@@ -1,14 +1,26 @@
 """Type stubs of the native module drapery._drapery (re-exported by drapery)."""
 
 import os
-from typing import Any, Dict, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, Mapping, Optional, Sequence, Union, final
 
 import numpy as np
 import numpy.typing as npt
 
+__all__ = [
+    "DraperyError",
+    "Scene",
+    "SceneError",
+    "Simulation",
+    "SimulationError",
+    "StateError",
+    "load_scene",
+    "run",
+    "__version__",
+]
+
 __version__: str
 
-StrPath = Union[str, "os.PathLike[str]"]
+_StrPath = Union[str, "os.PathLike[str]"]
 
 class DraperyError(Exception):
     """Base class of drapery's errors."""
@@ -22,6 +34,7 @@ class SimulationError(DraperyError):
 class StateError(DraperyError):
     """Saved state bytes that are damaged or belong to another scene."""
 
+@final
 class Scene:
     """A loaded and validated scene: its time span, step and cloths. Immutable."""
 
@@ -54,9 +67,10 @@ class Scene:
     def fingerprint(self) -> int:
         """A 64-bit hash of the scene text and meshes (as ``drapery run`` computes it)."""
 
-def load_scene(path: StrPath) -> Scene:
+def load_scene(path: _StrPath) -> Scene:
     """Reads and checks a scene file (TOML) and its meshes; raises SceneError."""
 
+@final
 class Simulation:
     """A simulation of a scene, at its initial state.
 
@@ -64,7 +78,7 @@ class Simulation:
     (default: rayon's global pool, one thread per core). Same bits whatever the thread count.
     """
 
-    def __init__(self, scene: Scene, threads: Optional[int] = None) -> None: ...
+    def __new__(cls, scene: Scene, threads: Optional[int] = None) -> "Simulation": ...
     @staticmethod
     def from_state(scene: Scene, state: bytes, threads: Optional[int] = None) -> "Simulation":
         """Continues from ``save_state()`` bytes (or a ``drapery run`` folder's state.bin) to the
@@ -105,8 +119,8 @@ class Simulation:
         """The whole state, exact to the bit, with the scene's fingerprint."""
 
 def run(
-    scene: Union[Scene, StrPath],
-    output: StrPath,
+    scene: Union[Scene, _StrPath],
+    output: _StrPath,
     formats: Union[Sequence[str], str, None] = None,
     threads: Optional[int] = None,
 ) -> None:
