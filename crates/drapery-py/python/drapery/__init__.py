@@ -11,26 +11,7 @@ Load a scene, step it, read and write numpy arrays::
 Stepping from Python gives the same bits as ``drapery run`` of the same scene.
 """
 
-from ._drapery import (
-    DraperyError,
-    Scene,
-    SceneError,
-    Simulation,
-    SimulationError,
-    StateError,
-    __version__,
-    load_scene,
-    run,
-)
+from . import _drapery
+from ._drapery import *  # noqa: F401,F403 (the names of _drapery.__all__, typed in _drapery.pyi)
 
-__all__ = [
-    "DraperyError",
-    "Scene",
-    "SceneError",
-    "Simulation",
-    "SimulationError",
-    "StateError",
-    "__version__",
-    "load_scene",
-    "run",
-]
+__all__ = list(_drapery.__all__)
