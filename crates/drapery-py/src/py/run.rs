@@ -1,0 +1,75 @@
+//! `drapery.run(scene, output, formats=["obj"], threads=None)`: the CLI's `drapery run` from
+//! Python (the frame loop of [`crate::frames`]), with the GIL released while stepping and
+//! Ctrl-C checked between frames.
+
+use super::errors::{scene_error, simulation_error};
+use super::scene::{PyScene, load_scene};
+use super::sim::pool;
+use crate::frames::{FrameFormat, FrameRun, RunError};
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyString;
+use std::path::PathBuf;
+
+/// Runs `f` in `pool`, or here.
+fn in_pool<R: Send>(pool: &Option<rayon::ThreadPool>, f: impl FnOnce() -> R + Send) -> R {
+    match pool {
+        Some(p) => p.install(f),
+        None => f(),
+    }
+}
+
+fn py_error(e: RunError) -> PyErr {
+    match e {
+        RunError::Build(_) => scene_error(&e),
+        RunError::Step { .. } => simulation_error(&e),
+        RunError::Write(_) => PyOSError::new_err(e.to_string()),
+    }
+}
+
+/// Simulates `scene` (a Scene, or the path of a scene file) and writes every frame into the
+/// folder `output` as `drapery run` does: frame_00000.obj (the initial state) to the last
+/// frame, byte for byte the CLI's files. `formats`: "obj" and/or "ply" (a list, or one string
+/// "obj,ply"). Existing frame files of the same names are replaced; no resume state is
+/// written (use the drapery command for --resume, glb and usd). Raises SceneError,
+/// SimulationError ("frame k: ...; frames 0 to k-1 are in DIR") or OSError.
+#[pyfunction]
+#[pyo3(signature = (scene, output, formats = None, threads = None))]
+pub fn run(
+    py: Python<'_>,
+    scene: &Bound<'_, PyAny>,
+    output: PathBuf,
+    formats: Option<&Bound<'_, PyAny>>,
+    threads: Option<usize>,
+) -> PyResult<()> {
+    let names: Vec<String> = match formats {
+        None => vec!["obj".into()],
+        Some(f) if f.is_instance_of::<PyString>() => f
+            .extract::<String>()?
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .collect(),
+        Some(f) => f.extract()?,
+    };
+    let formats = FrameFormat::parse_list(&names).map_err(PyValueError::new_err)?;
+    let scene: PyScene = match scene.cast::<PyScene>() {
+        Ok(s) => PyScene {
+            loaded: s.get().loaded.clone(),
+        },
+        Err(_) => load_scene(scene.extract()?)?,
+    };
+    let pool = pool(threads)?;
+    let s = scene.scene();
+    let mut frames = py
+        .detach(|| in_pool(&pool, || FrameRun::start(s, &output, &formats)))
+        .map_err(py_error)?;
+    loop {
+        py.check_signals()?;
+        let next = py
+            .detach(|| in_pool(&pool, || frames.next_frame()))
+            .map_err(py_error)?;
+        if next.is_none() {
+            return Ok(());
+        }
+    }
+}

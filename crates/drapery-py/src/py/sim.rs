@@ -1,0 +1,322 @@
+//! `drapery.Simulation`: a scene's simulation, stepped from Python.
+//!
+//! Every step is the library's [`Simulation::step`] with the scene's [`Scene::step_size`], as in
+//! `drapery run`, so positions after `k` frames are the bits of the CLI's frame `k`. Steps run
+//! with the GIL released, in the simulation's own rayon pool when `threads` is given (else in
+//! rayon's global pool); [`PySimulation::advance`] checks for signals between steps, so Ctrl-C
+//! interrupts it (the state is then that after the last whole step).
+//!
+//! [`Scene::step_size`]: drapery::scene::Scene::step_size
+
+use super::arrays::{triangle_array, vec3_array, vec3s};
+use super::errors::{simulation_error, state_error};
+use super::report::report_dict;
+use super::scene::{Loaded, PyScene};
+use drapery::snapshot::Snapshot;
+use drapery::{Simulation, StepReport, Vec3};
+use numpy::PyArray2;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+use std::ops::Range;
+use std::sync::Arc;
+
+/// What saved states carry after the scene fingerprint (the first 8 header bytes, little
+/// endian, as in the CLI's `state.bin`).
+const STATE_TAG: &[u8] = b"drapery-py";
+
+/// A simulation of a scene: `Simulation(scene, threads=None)`.
+#[pyclass(module = "drapery", name = "Simulation")]
+pub struct PySimulation {
+    sim: Simulation,
+    loaded: Arc<Loaded>,
+    /// The pool every step runs in (`threads`), or `None` for rayon's global pool.
+    pool: Option<rayon::ThreadPool>,
+    last: Option<StepReport>,
+}
+
+/// A pool of `threads` threads, or `None` for the global pool.
+pub fn pool(threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
+    let Some(n) = threads else {
+        return Ok(None);
+    };
+    if n == 0 {
+        return Err(PyValueError::new_err(
+            "threads must be at least 1 (or None for all cores)",
+        ));
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .thread_name(|i| format!("drapery-{i}"))
+        .build()
+        .map(Some)
+        .map_err(|e| simulation_error(format!("cannot start {n} threads: {e}")))
+}
+
+impl PySimulation {
+    fn build(scene: &PyScene, threads: Option<usize>) -> PyResult<PySimulation> {
+        let loaded = scene.loaded.clone();
+        let sim = loaded.scene.build().map_err(super::errors::scene_error)?;
+        Ok(PySimulation {
+            sim,
+            loaded,
+            pool: pool(threads)?,
+            last: None,
+        })
+    }
+
+    /// One step, here (the caller releases the GIL).
+    fn step_here(&mut self) -> drapery::Result<StepReport> {
+        let h = self.loaded.scene.step_size();
+        let sim = &mut self.sim;
+        match &self.pool {
+            Some(pool) => pool.install(|| sim.step(h)),
+            None => sim.step(h),
+        }
+    }
+
+    /// One step with the GIL released.
+    fn one_step(&mut self, py: Python<'_>) -> PyResult<()> {
+        let report = py.detach(|| self.step_here()).map_err(simulation_error)?;
+        self.last = Some(report);
+        Ok(())
+    }
+
+    /// The particle range of `cloth` (a name), or every particle.
+    fn range(&self, cloth: Option<&str>) -> PyResult<Range<usize>> {
+        let model = self.sim.model();
+        let Some(name) = cloth else {
+            return Ok(0..model.particle_count());
+        };
+        match model.cloth(name) {
+            Some(c) => Ok(c.range()),
+            None => {
+                let names: Vec<&str> = model.cloths().iter().map(|c| c.name.as_str()).collect();
+                Err(PyValueError::new_err(format!(
+                    "no cloth named '{name}' (the scene's cloths: {})",
+                    names.join(", ")
+                )))
+            }
+        }
+    }
+
+    /// `new` in place of the particles of `cloth` (or of all) in `all`.
+    fn replace(
+        &self,
+        all: &[Vec3],
+        new: &Bound<'_, PyAny>,
+        cloth: Option<&str>,
+        what: &str,
+    ) -> PyResult<Vec<Vec3>> {
+        let r = self.range(cloth)?;
+        let what = match cloth {
+            Some(c) => format!("{what} of cloth '{c}'"),
+            None => what.to_string(),
+        };
+        let part = vec3s(new, r.len(), &what)?;
+        let mut v = all.to_vec();
+        v[r].copy_from_slice(&part);
+        Ok(v)
+    }
+}
+
+#[pymethods]
+impl PySimulation {
+    /// A new simulation of `scene` at its initial state. `threads`: the size of a thread pool
+    /// of this simulation's own that every step runs in (default: rayon's global pool, one
+    /// thread per core). The results are the same bits whatever the thread count.
+    #[new]
+    #[pyo3(signature = (scene, threads = None))]
+    fn new(scene: PyRef<'_, PyScene>, threads: Option<usize>) -> PyResult<PySimulation> {
+        PySimulation::build(&scene, threads)
+    }
+
+    /// A simulation of `scene` continuing from `state` (bytes from `save_state`, or a
+    /// `drapery run` folder's state.bin): stepping on gives the same bits as the run that saved
+    /// it. Raises StateError when the bytes are damaged or belong to another scene (or the
+    /// scene or its meshes changed since).
+    #[staticmethod]
+    #[pyo3(signature = (scene, state, threads = None))]
+    fn from_state(
+        scene: PyRef<'_, PyScene>,
+        state: &[u8],
+        threads: Option<usize>,
+    ) -> PyResult<PySimulation> {
+        let mut s = PySimulation::build(&scene, threads)?;
+        let snapshot = Snapshot::from_bytes(state).map_err(state_error)?;
+        let saved = snapshot
+            .header()
+            .get(..8)
+            .and_then(|b| b.try_into().ok())
+            .map(u64::from_le_bytes);
+        match saved {
+            None => {
+                return Err(state_error(
+                    "not a state saved by drapery (no scene fingerprint in its header)",
+                ));
+            }
+            Some(f) if f != s.loaded.fingerprint => {
+                return Err(state_error(format!(
+                    "the state belongs to another scene than {} (or the scene or its meshes changed since it was saved)",
+                    s.loaded.scene.path.display()
+                )));
+            }
+            Some(_) => {}
+        }
+        s.sim.restore_snapshot(&snapshot).map_err(state_error)?;
+        Ok(s)
+    }
+
+    /// One step of `scene.step_size` seconds. Raises SimulationError (the state is then that
+    /// before the step).
+    fn step(&mut self, py: Python<'_>) -> PyResult<()> {
+        self.one_step(py)
+    }
+
+    /// `frames` frames of `scene.steps_per_frame` steps each; Ctrl-C (any Python signal
+    /// handler's exception) interrupts it between two steps.
+    #[pyo3(signature = (frames = 1))]
+    fn advance(&mut self, py: Python<'_>, frames: usize) -> PyResult<()> {
+        let steps = frames
+            .checked_mul(self.loaded.scene.steps_per_frame())
+            .ok_or_else(|| PyValueError::new_err(format!("{frames} frames is too many steps")))?;
+        for _ in 0..steps {
+            self.one_step(py)?;
+            py.check_signals()?;
+        }
+        Ok(())
+    }
+
+    /// Simulated time, s.
+    #[getter]
+    fn time(&self) -> f64 {
+        self.sim.time()
+    }
+
+    /// Steps taken since the initial state.
+    #[getter]
+    fn steps(&self) -> u64 {
+        self.sim.steps()
+    }
+
+    /// Whole frames of steps taken: steps // scene.steps_per_frame (frame k is the state
+    /// `drapery run` writes as frame_k).
+    #[getter]
+    fn frame(&self) -> u64 {
+        self.sim.steps() / self.loaded.scene.steps_per_frame() as u64
+    }
+
+    /// The scene simulated.
+    #[getter]
+    fn scene(&self) -> PyScene {
+        PyScene {
+            loaded: self.loaded.clone(),
+        }
+    }
+
+    /// The cloths' names, in particle order.
+    #[getter]
+    fn cloths(&self) -> Vec<String> {
+        self.sim
+            .model()
+            .cloths()
+            .iter()
+            .map(|c| c.name.clone())
+            .collect()
+    }
+
+    /// The last step's report (iterations, contacts, seconds per stage), or None before the
+    /// first step.
+    #[getter]
+    fn last_report<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        self.last.as_ref().map(|r| report_dict(py, r)).transpose()
+    }
+
+    /// Positions, m, as a new float64 array of shape (n, 3): every particle (cloths in scene
+    /// order) or those of the cloth named.
+    #[pyo3(signature = (cloth = None))]
+    fn positions<'py>(
+        &self,
+        py: Python<'py>,
+        cloth: Option<&str>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        vec3_array(py, &self.sim.positions()[self.range(cloth)?])
+    }
+
+    /// Velocities, m/s, as `positions`.
+    #[pyo3(signature = (cloth = None))]
+    fn velocities<'py>(
+        &self,
+        py: Python<'py>,
+        cloth: Option<&str>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        vec3_array(py, &self.sim.velocities()[self.range(cloth)?])
+    }
+
+    /// Sets positions (shape (n, 3), any real dtype) of every particle or of one cloth's,
+    /// between steps. Raises ValueError, changing nothing, on a wrong shape or a non-finite
+    /// value. Pinned particles move too: a pin holds a particle where it is.
+    #[pyo3(signature = (positions, cloth = None))]
+    fn set_positions(&mut self, positions: &Bound<'_, PyAny>, cloth: Option<&str>) -> PyResult<()> {
+        let x = self.replace(self.sim.positions(), positions, cloth, "positions")?;
+        self.sim
+            .set_positions(&x)
+            .map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+
+    /// Sets velocities, as `set_positions`.
+    #[pyo3(signature = (velocities, cloth = None))]
+    fn set_velocities(
+        &mut self,
+        velocities: &Bound<'_, PyAny>,
+        cloth: Option<&str>,
+    ) -> PyResult<()> {
+        let v = self.replace(self.sim.velocities(), velocities, cloth, "velocities")?;
+        self.sim
+            .set_velocities(&v)
+            .map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+
+    /// Triangles (quads split in two) as an int64 array of shape (m, 3): of the cloth named,
+    /// indexing its rows of `positions(cloth)`, or of every cloth, indexing `positions()`.
+    /// Line elements (`l` springs) are not included.
+    #[pyo3(signature = (cloth = None))]
+    fn faces<'py>(
+        &self,
+        py: Python<'py>,
+        cloth: Option<&str>,
+    ) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let model = self.sim.model();
+        let triangles = match cloth {
+            None => model.triangles(),
+            Some(name) => {
+                self.range(Some(name))?;
+                model
+                    .cloth(name)
+                    .map(|c| c.mesh.triangles())
+                    .unwrap_or_default()
+            }
+        };
+        triangle_array(py, &triangles)
+    }
+
+    /// The whole state (positions, velocities, the solver's warm start, time, step count) as
+    /// bytes, with the scene's fingerprint: `Simulation.from_state(scene, bytes)` continues
+    /// from here to the same bits.
+    fn save_state<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+        let mut header = self.loaded.fingerprint.to_le_bytes().to_vec();
+        header.extend_from_slice(STATE_TAG);
+        let bytes = self.sim.snapshot().with_header(header).to_bytes();
+        PyBytes::new(py, &bytes)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Simulation({:?}, frame {}, t = {} s, {} particles)",
+            self.loaded.scene.path.display().to_string(),
+            self.frame(),
+            self.sim.time(),
+            self.sim.positions().len()
+        )
+    }
+}
