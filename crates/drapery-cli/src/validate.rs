@@ -47,10 +47,7 @@ pub fn validate(args: ValidateArgs) -> Result<()> {
         out.push_str("colliders: none\n");
     }
     for (i, o) in model.obstacles().iter().enumerate() {
-        out.push_str(&format!(
-            "collider[{i}]: {}\n",
-            crate::colliders::describe(o)
-        ));
+        out.push_str(&format!("collider[{i}]: {}\n", o.describe()));
     }
     if model.collision().is_some() {
         let (pairs, inside) = sim.intersections();

@@ -5,9 +5,7 @@
 //! collision settings and every collider (mesh colliders' vertices and triangles included).
 //! Editing the scene file or any mesh it uses changes the fingerprint.
 
-use crate::collision::colliders::Shape;
 use crate::collision::settings::Obstacle;
-use crate::math::Vec3;
 use crate::scene::Scene;
 
 /// FNV-1a, 64 bits: a small, stable hash (the same value on every platform and version), used
@@ -92,59 +90,9 @@ pub fn fingerprint(scene: &Scene, scene_text: &[u8]) -> u64 {
 }
 
 fn hash_obstacle(h: &mut Fnv, o: &Obstacle) {
-    let vec = |h: &mut Fnv, v: Vec3| {
-        for k in 0..3 {
-            h.u64(v[k].to_bits());
-        }
-    };
-    let c = &o.collider;
     h.u64(o.friction.to_bits());
-    vec(h, c.motion.velocity);
-    vec(h, c.motion.angular_velocity);
-    match &c.shape {
-        Shape::Plane { point, normal } => {
-            h.bytes(b"plane");
-            vec(h, *point);
-            vec(h, *normal);
-        }
-        Shape::Sphere { center, radius } => {
-            h.bytes(b"sphere");
-            vec(h, *center);
-            h.u64(radius.to_bits());
-        }
-        Shape::Capsule { a, b, radius } => {
-            h.bytes(b"capsule");
-            vec(h, *a);
-            vec(h, *b);
-            h.u64(radius.to_bits());
-        }
-        Shape::Box {
-            center,
-            half_extents,
-            rotation,
-        } => {
-            h.bytes(b"box");
-            vec(h, *center);
-            vec(h, *half_extents);
-            for q in rotation.to_array() {
-                h.u64(q.to_bits());
-            }
-        }
-        Shape::Mesh(m) => {
-            h.bytes(b"mesh");
-            vec(h, m.pivot());
-            h.u64(m.vertices().len() as u64);
-            for p in m.vertices() {
-                vec(h, *p);
-            }
-            h.u64(m.triangles().len() as u64);
-            for t in m.triangles() {
-                for &i in t {
-                    h.u64(i as u64);
-                }
-            }
-        }
-    }
+    o.collider.motion.hash(h);
+    o.collider.shape.hash(h);
 }
 
 #[cfg(test)]

@@ -9,7 +9,7 @@
 //!
 //! Drape and pile have collisions on (thickness 5 mm, self-collision, friction 0.3).
 
-use crate::collision::colliders::{Collider, Shape};
+use crate::collision::colliders::{Collider, Plane, Shape, Sphere};
 use crate::collision::settings::{CollisionSettings, Obstacle};
 use crate::model::{ClothDesc, MassSpec, Material, Model};
 use crate::{Error, Mesh, Result, Simulation, SolverSettings, Vec3};
@@ -76,19 +76,19 @@ impl Preset {
                 Vec3::new(0.0, 0.4, 0.0),
                 Vec3::Y,
                 vec![],
-                Some(Shape::Sphere {
+                Some(Shape::Sphere(Sphere {
                     center: Vec3::ZERO,
                     radius: 0.3,
-                }),
+                })),
             ),
             Preset::Pile => (
                 Vec3::new(0.0, 0.6, 0.0),
                 Vec3::new(0.0, 0.3, 1.0),
                 vec![],
-                Some(Shape::Plane {
+                Some(Shape::Plane(Plane {
                     point: Vec3::ZERO,
                     normal: Vec3::Y,
-                }),
+                })),
             ),
         };
         let name = match self {

@@ -14,7 +14,7 @@
 //! Triangles with a non-finite vertex are skipped.
 
 use super::broad_phase::{Aabb, overlapping_pairs, overlapping_pairs_between};
-use super::colliders::{Collider, Shape};
+use super::colliders::Collider;
 use super::predicates::{orient2d, orient3d};
 use crate::math::Vec3;
 use rayon::prelude::*;
@@ -55,9 +55,9 @@ pub fn count_intersections_between(
 pub fn count_penetrations(x: &[Vec3], colliders: &[Collider], t: f64, tol: f64) -> usize {
     x.par_iter()
         .filter(|&&p| {
-            colliders.iter().any(|c| {
-                !matches!(c.shape, Shape::Mesh(_)) && c.closest(p, t).signed_distance < -tol
-            })
+            colliders
+                .iter()
+                .any(|c| c.is_solid() && c.closest(p, t).signed_distance < -tol)
         })
         .count()
 }
@@ -169,6 +169,10 @@ fn segments_2d(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    #[allow(unused_imports)]
+    use crate::collision::colliders::{
+        Capsule, Collider, Cuboid, Motion, Plane, Shape, Sphere, TriangleMesh,
+    };
     use crate::mesh::Mesh;
 
     fn v(x: f64, y: f64, z: f64) -> Vec3 {
@@ -245,14 +249,14 @@ mod tests {
     #[test]
     fn penetrations_of_analytic_colliders() {
         let cs = [
-            Collider::fixed(Shape::Sphere {
+            Collider::fixed(Shape::Sphere(Sphere {
                 center: Vec3::ZERO,
                 radius: 1.0,
-            }),
-            Collider::fixed(Shape::Plane {
+            })),
+            Collider::fixed(Shape::Plane(Plane {
                 point: v(0.0, -2.0, 0.0),
                 normal: Vec3::Y,
-            }),
+            })),
         ];
         let x = [
             v(0.0, 0.5, 0.0),    // inside sphere

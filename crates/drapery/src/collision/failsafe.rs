@@ -20,7 +20,6 @@ use super::ccd::{
     edge_edge_gap_toi, edge_edge_may_touch, edge_edge_toi, vertex_triangle_gap_toi,
     vertex_triangle_may_touch, vertex_triangle_toi,
 };
-use super::colliders::Shape;
 use super::distance::{point_triangle, segment_segment};
 use super::settings::Obstacle;
 use crate::math::Vec3;
@@ -147,10 +146,10 @@ fn sweep(o: &Obstacle, x0: Vec3, x1: Vec3, t0: f64, h: f64, stop: f64) -> Option
     let col = &o.collider;
     let len = (x1 - x0).length();
     let c = col.center();
-    let reach = (x0 - c).length().max((x1 - c).length()) + len + col.motion.velocity.length() * h;
+    let (speed, spin) = col.speed_bound(t0, t0 + h);
+    let reach = (x0 - c).length().max((x1 - c).length()) + len + speed * h;
     // bound on d(distance)/ds along the path (surface point speeds × h plus the path length)
-    let rate =
-        len + h * (col.motion.velocity.length() + col.motion.angular_velocity.length() * reach);
+    let rate = len + h * (speed + spin * reach);
     let mut s = 0.0;
     for _ in 0..1000 {
         let d = col.closest(x0 + s * (x1 - x0), t0 + s * h).signed_distance;
@@ -184,10 +183,7 @@ pub fn failsafe(
     let mut report = FailsafeReport::default();
     let stop = 0.1 * thickness;
     // 1. analytic obstacles
-    let analytic: Vec<&Obstacle> = obstacles
-        .iter()
-        .filter(|o| !matches!(o.collider.shape, Shape::Mesh(_)))
-        .collect();
+    let analytic: Vec<&Obstacle> = obstacles.iter().filter(|o| o.collider.is_solid()).collect();
     if !analytic.is_empty() {
         let moved: Vec<Option<(Vec3, bool)>> = (0..n)
             .into_par_iter()
@@ -231,7 +227,7 @@ pub fn failsafe(
     let meshes: Vec<(usize, &Obstacle)> = obstacles
         .iter()
         .enumerate()
-        .filter(|(_, o)| matches!(o.collider.shape, Shape::Mesh(_)))
+        .filter(|(_, o)| !o.collider.is_solid())
         .collect();
     if !self_collision && meshes.is_empty() {
         return Ok(report);
@@ -242,17 +238,17 @@ pub fn failsafe(
     let mut all_edges: Vec<[u32; 2]> = edges.to_vec();
     let mut owner: Vec<usize> = Vec::new(); // obstacle index of each obstacle vertex
     for &(k, o) in &meshes {
-        let Shape::Mesh(m) = &o.collider.shape else {
+        let (Some((start, triangles)), Some((end, _))) =
+            (o.collider.surface(t0), o.collider.surface(t0 + h))
+        else {
             continue;
         };
         let base = ys0.len() as u32;
-        for &p in m.vertices() {
-            ys0.push(o.collider.transform_point(p, t0));
-            ys1.push(o.collider.transform_point(p, t0 + h));
-            owner.push(k);
-        }
+        ys0.extend(start);
+        ys1.extend(end);
+        owner.extend(std::iter::repeat_n(k, ys0.len() - base as usize));
         let mut seen = std::collections::HashSet::new();
-        for t in m.triangles() {
+        for t in triangles {
             tris.push(t.map(|i| i + base));
             for e in [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]] {
                 let key = (e[0].min(e[1]), e[0].max(e[1]));

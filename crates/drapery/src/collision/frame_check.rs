@@ -10,7 +10,7 @@
 //!   ([`super::check::count_intersections_between`]).
 
 use super::check::{count_intersections_between, count_penetrations, count_self_intersections};
-use super::colliders::{Collider, Shape};
+use super::colliders::Collider;
 use crate::math::Vec3;
 
 /// What [`check_frame`] found.
@@ -46,14 +46,8 @@ pub fn check_frame(
         mesh_intersections: 0,
     };
     for c in colliders {
-        if let Shape::Mesh(m) = &c.shape {
-            let posed: Vec<Vec3> = m
-                .vertices()
-                .iter()
-                .map(|&v| c.transform_point(v, t))
-                .collect();
-            r.mesh_intersections +=
-                count_intersections_between(x, triangles, &posed, m.triangles());
+        if let Some((posed, tris)) = c.surface(t) {
+            r.mesh_intersections += count_intersections_between(x, triangles, &posed, tris);
         }
     }
     r
@@ -62,7 +56,10 @@ pub fn check_frame(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::collision::colliders::{RigidMotion, TriangleMesh};
+    #[allow(unused_imports)]
+    use crate::collision::colliders::{
+        Capsule, Collider, Cuboid, Motion, Plane, Shape, Sphere, TriangleMesh,
+    };
     use crate::mesh::Mesh;
 
     #[test]
@@ -77,15 +74,15 @@ mod tests {
                 plate.positions.clone(),
                 plate.triangles(),
             )),
-            motion: RigidMotion {
+            motion: Motion::Constant {
                 velocity: Vec3::new(0.0, -1.0, 0.0),
                 angular_velocity: Vec3::ZERO,
             },
         };
-        let ball = Collider::fixed(Shape::Sphere {
+        let ball = Collider::fixed(Shape::Sphere(Sphere {
             center: Vec3::new(0.3, 0.3, 0.3),
             radius: 0.1,
-        });
+        }));
         let cs = [plate, ball];
         let early = check_frame(&x, &tris, &cs, 0.0, 1e-9);
         assert_eq!(early.mesh_intersections, 0);

@@ -48,3 +48,16 @@ pub struct Obstacle {
     /// Coulomb coefficient for contacts with this obstacle.
     pub friction: f64,
 }
+
+impl Obstacle {
+    /// One line: `sphere center [0, 0.25, 0] radius 0.25 m, friction 0.3, angular_velocity
+    /// [0, 3.14, 0] rad/s`.
+    pub fn describe(&self) -> String {
+        format!(
+            "{}, friction {}{}",
+            self.collider.shape.describe(),
+            self.friction,
+            self.collider.motion.describe()
+        )
+    }
+}

@@ -8,7 +8,7 @@
 //! which is infinite, is drawn as a square of a chosen half size around a chosen point
 //! (projected onto the plane); a mesh collider is its own triangles.
 
-use super::colliders::{Collider, Shape};
+use super::colliders::Collider;
 use crate::math::Vec3;
 
 /// How finely and how large colliders are drawn.
@@ -33,14 +33,14 @@ impl Default for TessellateOptions {
 }
 
 /// Two unit vectors completing `u` (unit) to a right-handed frame `(e1, e2, u)`.
-fn frame(u: Vec3) -> (Vec3, Vec3) {
+pub(crate) fn frame(u: Vec3) -> (Vec3, Vec3) {
     let helper = if u.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
     let e1 = helper.cross(u).normalize();
     let e2 = u.cross(e1);
     (e1, e2)
 }
 
-fn unit_or(v: Vec3, fallback: Vec3) -> Vec3 {
+pub(crate) fn unit_or(v: Vec3, fallback: Vec3) -> Vec3 {
     let l = v.length();
     if l > 0.0 && l.is_finite() {
         v / l
@@ -50,7 +50,7 @@ fn unit_or(v: Vec3, fallback: Vec3) -> Vec3 {
 }
 
 /// A capsule around the segment `center ± half_length·u` (a sphere when `half_length = 0`).
-fn capsule(
+pub(crate) fn capsule_mesh(
     center: Vec3,
     u: Vec3,
     half_length: f64,
@@ -106,65 +106,7 @@ pub fn tessellate(
     t: f64,
     options: &TessellateOptions,
 ) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let (rest, triangles) = match &collider.shape {
-        Shape::Plane { point, normal } => {
-            let n = unit_or(*normal, Vec3::Z);
-            let (e1, e2) = frame(n);
-            let c = options.plane_center - n * (options.plane_center - *point).dot(n);
-            let s = options.plane_half_size;
-            let v = vec![
-                c + (-e1 - e2) * s,
-                c + (e1 - e2) * s,
-                c + (e1 + e2) * s,
-                c + (-e1 + e2) * s,
-            ];
-            (v, vec![[0, 1, 2], [0, 2, 3]])
-        }
-        Shape::Sphere { center, radius } => {
-            capsule(*center, Vec3::Z, 0.0, radius.max(0.0), options.segments)
-        }
-        Shape::Capsule { a, b, radius } => {
-            let u = unit_or(*b - *a, Vec3::Z);
-            let half = 0.5 * (*b - *a).length();
-            capsule(
-                (*a + *b) * 0.5,
-                u,
-                if half.is_finite() { half } else { 0.0 },
-                radius.max(0.0),
-                options.segments,
-            )
-        }
-        Shape::Box {
-            center,
-            half_extents,
-            rotation,
-        } => {
-            let h = half_extents.max(Vec3::ZERO);
-            let mut v = Vec::with_capacity(24);
-            let mut tris = Vec::with_capacity(12);
-            for k in 0..3 {
-                let (a, b) = ((k + 1) % 3, (k + 2) % 3);
-                for s in [1.0, -1.0] {
-                    let mut loop_ = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
-                    if s < 0.0 {
-                        loop_.reverse();
-                    }
-                    let first = v.len() as u32;
-                    for (p, q) in loop_ {
-                        let mut l = Vec3::ZERO;
-                        l[k] = s * h[k];
-                        l[a] = p * h[a];
-                        l[b] = q * h[b];
-                        v.push(*center + *rotation * l);
-                    }
-                    tris.push([first, first + 1, first + 2]);
-                    tris.push([first, first + 2, first + 3]);
-                }
-            }
-            (v, tris)
-        }
-        Shape::Mesh(m) => (m.vertices().to_vec(), m.triangles().to_vec()),
-    };
+    let (rest, triangles) = collider.shape.tessellate(t, options);
     let posed = rest
         .into_iter()
         .map(|p| collider.transform_point(p, t))
@@ -175,7 +117,7 @@ pub fn tessellate(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::collision::colliders::RigidMotion;
+    use crate::collision::colliders::{Capsule, Cuboid, Motion, Plane, Shape, Sphere};
     use glam::DQuat;
 
     fn check_outward(c: &Collider, t: f64) -> usize {
@@ -196,11 +138,11 @@ mod tests {
     fn sphere_vertices_lie_on_the_sphere_and_triangles_face_out() {
         let center = Vec3::new(0.1, 0.7, -0.2);
         let c = Collider {
-            shape: Shape::Sphere {
+            shape: Shape::Sphere(Sphere {
                 center,
                 radius: 0.25,
-            },
-            motion: RigidMotion {
+            }),
+            motion: Motion::Constant {
                 velocity: Vec3::new(0.0, 0.0, 1.0),
                 angular_velocity: Vec3::new(0.0, 3.0, 0.0),
             },
@@ -216,26 +158,26 @@ mod tests {
     #[test]
     fn capsules_boxes_and_planes_face_out() {
         let shapes = [
-            Shape::Capsule {
+            Shape::Capsule(Capsule {
                 a: Vec3::new(-0.5, 0.0, 0.0),
                 b: Vec3::new(0.5, 0.2, 0.1),
                 radius: 0.2,
-            },
-            Shape::Box {
+            }),
+            Shape::Box(Cuboid {
                 center: Vec3::new(0.0, 0.5, 0.0),
                 half_extents: Vec3::new(0.5, 0.3, 0.2),
                 rotation: DQuat::from_scaled_axis(Vec3::new(0.3, -0.5, 0.8)),
-            },
-            Shape::Plane {
+            }),
+            Shape::Plane(Plane {
                 point: Vec3::new(0.0, -0.1, 0.0),
                 normal: Vec3::new(0.0, 2.0, 0.3),
-            },
+            }),
         ];
         for s in shapes {
             check_outward(&Collider::fixed(s.clone()), 0.0);
             let moving = Collider {
                 shape: s,
-                motion: RigidMotion {
+                motion: Motion::Constant {
                     velocity: Vec3::X,
                     angular_velocity: Vec3::new(1.0, 2.0, 0.5),
                 },
@@ -243,11 +185,11 @@ mod tests {
             check_outward(&moving, 0.7);
         }
         // capsule vertices lie on the capsule
-        let c = Collider::fixed(Shape::Capsule {
+        let c = Collider::fixed(Shape::Capsule(Capsule {
             a: Vec3::ZERO,
             b: Vec3::Y,
             radius: 0.1,
-        });
+        }));
         let (v, _) = tessellate(&c, 0.0, &TessellateOptions::default());
         for p in v {
             assert!(c.closest(p, 0.0).signed_distance.abs() < 1e-12);

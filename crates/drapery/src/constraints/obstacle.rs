@@ -9,7 +9,6 @@
 //! impulses) and is examined afresh at the next step.
 
 use super::Constraints;
-use crate::collision::colliders::Shape;
 use crate::collision::settings::Obstacle;
 use crate::linalg::BlockMatrix;
 use crate::math::Vec3;
@@ -34,7 +33,7 @@ pub struct ObstacleContact {
 /// normal toward the particle, surface velocity).
 fn contact(o: &Obstacle, p: Vec3, t: f64) -> (f64, Vec3, Vec3) {
     let c = o.collider.closest(p, t);
-    if matches!(o.collider.shape, Shape::Mesh(_)) {
+    if !o.collider.is_solid() {
         let d = p - c.point;
         let l = d.length();
         let n = if l > 1e-12 { d / l } else { c.normal * c.side };
@@ -223,14 +222,17 @@ impl ActiveSet {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::collision::colliders::Collider;
+    #[allow(unused_imports)]
+    use crate::collision::colliders::{
+        Capsule, Collider, Cuboid, Motion, Plane, Shape, Sphere, TriangleMesh,
+    };
 
     fn ground() -> Obstacle {
         Obstacle {
-            collider: Collider::fixed(Shape::Plane {
+            collider: Collider::fixed(Shape::Plane(Plane {
                 point: Vec3::ZERO,
                 normal: Vec3::Y,
-            }),
+            })),
             friction: 0.5,
         }
     }

@@ -349,7 +349,7 @@ impl Simulation {
     pub fn set_obstacle_motion(
         &mut self,
         index: usize,
-        motion: crate::collision::colliders::RigidMotion,
+        motion: crate::animation::Motion,
     ) -> Result<()> {
         let n = self.model.obstacles.len();
         let field = format!("collider[{index}]");
@@ -359,11 +359,7 @@ impl Simulation {
                 format!("no such collider: the scene has {n}"),
             ));
         };
-        crate::validate::finite3(&format!("{field}.velocity"), motion.velocity)?;
-        crate::validate::finite3(
-            &format!("{field}.angular_velocity"),
-            motion.angular_velocity,
-        )?;
+        motion.validate(&field)?;
         o.collider.motion = motion;
         Ok(())
     }

@@ -26,7 +26,7 @@ pub(crate) fn at(model: &Model, t0: f64, h: f64) -> Pose {
     let surface_speed = model
         .obstacles
         .iter()
-        .map(|o| o.collider.motion.velocity.length())
+        .map(|o| o.collider.speed_bound(t0, t0 + h).0)
         .fold(0.0, f64::max);
     Pose {
         t0,
@@ -39,7 +39,10 @@ pub(crate) fn at(model: &Model, t0: f64, h: f64) -> Pose {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::collision::colliders::{Collider, RigidMotion, Shape};
+    #[allow(unused_imports)]
+    use crate::collision::colliders::{
+        Capsule, Collider, Cuboid, Motion, Plane, Shape, Sphere, TriangleMesh,
+    };
     use crate::collision::settings::Obstacle;
     use crate::math::Vec3;
     use crate::step::testing;
@@ -50,11 +53,11 @@ mod tests {
         assert_eq!(at(&m, 0.0, 0.01).surface_speed, 0.0);
         m.obstacles.push(Obstacle {
             collider: Collider {
-                shape: Shape::Sphere {
+                shape: Shape::Sphere(Sphere {
                     center: Vec3::ZERO,
                     radius: 0.1,
-                },
-                motion: RigidMotion {
+                }),
+                motion: Motion::Constant {
                     velocity: Vec3::new(3.0, 4.0, 0.0),
                     angular_velocity: Vec3::ZERO,
                 },

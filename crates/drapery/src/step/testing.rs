@@ -1,6 +1,6 @@
 //! Small models for the stages' tests.
 
-use crate::collision::colliders::{Collider, Shape};
+use crate::collision::colliders::{Collider, Plane, Shape};
 use crate::collision::settings::{CollisionSettings, Obstacle};
 use crate::math::Vec3;
 use crate::mesh::Mesh;
@@ -34,10 +34,10 @@ pub fn sheet_on_ground(k: usize, y: f64) -> Model {
     let mut m = sheet(k, y, vec![]);
     m.collision = Some(CollisionSettings::default());
     m.obstacles = vec![Obstacle {
-        collider: Collider::fixed(Shape::Plane {
+        collider: Collider::fixed(Shape::Plane(Plane {
             point: Vec3::ZERO,
             normal: Vec3::Y,
-        }),
+        })),
         friction: 0.5,
     }];
     m

@@ -3,7 +3,7 @@
 use drapery::collision::check::{
     count_intersections_between, count_penetrations, count_self_intersections,
 };
-use drapery::collision::colliders::{Collider, RigidMotion, Shape, TriangleMesh};
+use drapery::collision::colliders::{Collider, Motion, Plane, Shape, Sphere, TriangleMesh};
 use drapery::collision::settings::{CollisionSettings, Obstacle};
 use drapery::math::Vec3;
 use drapery::mesh::Mesh;
@@ -50,10 +50,10 @@ fn sim(
 /// The plane y = 0 with Coulomb coefficient `friction`.
 fn ground(friction: f64) -> Obstacle {
     Obstacle {
-        collider: Collider::fixed(Shape::Plane {
+        collider: Collider::fixed(Shape::Plane(Plane {
             point: Vec3::ZERO,
             normal: Vec3::Y,
-        }),
+        })),
         friction,
     }
 }
@@ -89,10 +89,10 @@ fn run_clean(s: &mut Simulation, steps: usize, h: f64) {
 #[test]
 fn a_sheet_drapes_over_a_sphere_without_penetrating_it() {
     let sphere = Obstacle {
-        collider: Collider::fixed(Shape::Sphere {
+        collider: Collider::fixed(Shape::Sphere(Sphere {
             center: Vec3::ZERO,
             radius: 0.3,
-        }),
+        })),
         friction: 0.3,
     };
     let mut s = sim(
@@ -200,10 +200,10 @@ fn friction_holds_a_sheet_on_a_tilted_plane_and_without_it_the_sheet_slides() {
     let mut travel = Vec::new();
     for mu in [0.8, 0.0] {
         let plane = Obstacle {
-            collider: Collider::fixed(Shape::Plane {
+            collider: Collider::fixed(Shape::Plane(Plane {
                 point: Vec3::ZERO,
                 normal,
-            }),
+            })),
             friction: mu,
         };
         let centre = normal * 0.008;
@@ -238,10 +238,10 @@ fn a_spinning_sphere_drags_the_sheet_around_by_friction() {
     // points move toward decreasing atan2(z, x)): the part of the sheet resting on top turns with
     // the surface. (A sphere's pose does not depend on its rotation, so the spin can start mid-run.)
     let sphere = Obstacle {
-        collider: Collider::fixed(Shape::Sphere {
+        collider: Collider::fixed(Shape::Sphere(Sphere {
             center: Vec3::ZERO,
             radius: 1.0,
-        }),
+        })),
         friction: 0.8,
     };
     let mut s = sim(
@@ -270,7 +270,7 @@ fn a_spinning_sphere_drags_the_sheet_around_by_friction() {
         .collect();
     s.set_obstacle_motion(
         0,
-        RigidMotion {
+        Motion::Constant {
             velocity: Vec3::ZERO,
             angular_velocity: Vec3::new(0.0, 1.5, 0.0),
         },
@@ -326,10 +326,10 @@ fn a_particle_moving_away_from_an_obstacle_is_not_held_by_it() {
 #[test]
 fn a_sheet_starting_deep_inside_a_sphere_is_pushed_out_without_blowing_up() {
     let sphere = Obstacle {
-        collider: Collider::fixed(Shape::Sphere {
+        collider: Collider::fixed(Shape::Sphere(Sphere {
             center: Vec3::new(0.0, 0.4, 0.0),
             radius: 0.3,
-        }),
+        })),
         friction: 0.3,
     };
     let mut s = sim(
@@ -368,7 +368,7 @@ fn a_mesh_spinning_about_the_origin_of_its_file_carries_the_sheet_around_it() {
     let g = Mesh::grid([0.5, 0.5], [6, 6], Vec3::new(0.6, 0.0, 0.0), Vec3::Y).unwrap();
     let plate = TriangleMesh::new(g.positions.clone(), g.triangles());
     let (plate_vertices, plate_triangles) = (plate.vertices().to_vec(), plate.triangles().to_vec());
-    let spin = RigidMotion {
+    let spin = Motion::Constant {
         velocity: Vec3::ZERO,
         angular_velocity: Vec3::Y,
     };

@@ -54,7 +54,6 @@
 //! `duration·frame_rate` must be a whole number of frames (within 1e-6 relative), at least 1;
 //! frames `0..=frame_count` are produced, frame 0 being the initial state.
 
-use crate::collision::colliders::{Collider, RigidMotion, Shape, TriangleMesh};
 use crate::collision::settings::{CollisionSettings, Obstacle};
 use crate::error::{Error, Result};
 use crate::math::Vec3;
@@ -63,6 +62,8 @@ use crate::model::{ClothDesc, MassSpec, Material, Model};
 use crate::step::{LinearSolver, Simulation, SolverSettings};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
+
+mod collider;
 
 /// Relative tolerance for "whole number" checks on steps per frame and frame counts.
 pub const WHOLE_TOLERANCE: f64 = 1e-6;
@@ -107,7 +108,7 @@ struct SceneFile {
     cloth: Vec<ClothTable>,
     collision: Option<CollisionTable>,
     #[serde(default)]
-    collider: Vec<ColliderTable>,
+    collider: Vec<toml::Table>,
 }
 
 #[derive(Deserialize)]
@@ -117,26 +118,6 @@ struct CollisionTable {
     self_collision: Option<bool>,
     friction: Option<f64>,
     stiffness: Option<f64>,
-}
-
-/// One `[[collider]]`: every key any shape uses; which ones are required or allowed depends on
-/// `shape` and is checked after parsing, so that messages name the collider and the shape.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ColliderTable {
-    shape: String,
-    friction: Option<f64>,
-    velocity: Option<[f64; 3]>,
-    angular_velocity: Option<[f64; 3]>,
-    point: Option<[f64; 3]>,
-    normal: Option<[f64; 3]>,
-    center: Option<[f64; 3]>,
-    radius: Option<f64>,
-    a: Option<[f64; 3]>,
-    b: Option<[f64; 3]>,
-    half_extents: Option<[f64; 3]>,
-    rotation: Option<[f64; 4]>,
-    mesh: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -235,17 +216,6 @@ fn toml_message(text: &str, e: &toml::de::Error) -> String {
 }
 
 /// A finite number ≥ 0.
-fn nonneg(what: &str, field: &str, v: f64) -> std::result::Result<f64, String> {
-    if v >= 0.0 && v.is_finite() {
-        Ok(v)
-    } else {
-        Err(format!(
-            "{what}{field} must be a finite number ≥ 0, got {v}"
-        ))
-    }
-}
-
-/// A finite number > 0.
 fn positive(what: &str, field: &str, v: f64) -> std::result::Result<f64, String> {
     if v > 0.0 && v.is_finite() {
         Ok(v)
@@ -400,7 +370,7 @@ impl Scene {
         let mut obstacles = Vec::with_capacity(file.collider.len());
         let default_friction = collision.unwrap_or_default().friction;
         for (i, c) in file.collider.iter().enumerate() {
-            obstacles.push(obstacle(i, c, default_friction, dir, path)?);
+            obstacles.push(collider::obstacle(i, c, default_friction, dir).map_err(located)?);
         }
         if collision.is_none() && !obstacles.is_empty() {
             collision = Some(CollisionSettings::default());
@@ -551,151 +521,6 @@ fn field_line(text: &str, field: &str) -> Option<usize> {
         }
     }
     Some(start + 1)
-}
-
-/// Shape names of `[[collider]]`.
-pub const SHAPES: [&str; 5] = ["plane", "sphere", "capsule", "box", "mesh"];
-
-/// The keys of `[[collider]]` that only some shapes use, with the shapes that use them.
-const SHAPE_KEYS: [(&str, &[&str]); 9] = [
-    ("point", &["plane"]),
-    ("normal", &["plane"]),
-    ("center", &["sphere", "box", "mesh"]),
-    ("radius", &["sphere", "capsule"]),
-    ("a", &["capsule"]),
-    ("b", &["capsule"]),
-    ("half_extents", &["box"]),
-    ("rotation", &["box"]),
-    ("mesh", &["mesh"]),
-];
-
-/// One `[[collider]]` table as an obstacle; errors name the scene file, the collider and the
-/// field (mesh errors name the mesh file and its line).
-fn obstacle(
-    i: usize,
-    c: &ColliderTable,
-    default_friction: f64,
-    dir: &Path,
-    path: &Path,
-) -> Result<Obstacle> {
-    let file_err = |m: String| Error::input(path.display(), m);
-    let shape = c.shape.as_str();
-    if !SHAPES.contains(&shape) {
-        return Err(file_err(format!(
-            "collider[{i}]: unknown shape '{shape}', expected one of \"plane\", \"sphere\", \"capsule\", \"box\", \"mesh\""
-        )));
-    }
-    let what = format!("collider[{i}] ({shape}): ");
-    let present = [
-        c.point.is_some(),
-        c.normal.is_some(),
-        c.center.is_some(),
-        c.radius.is_some(),
-        c.a.is_some(),
-        c.b.is_some(),
-        c.half_extents.is_some(),
-        c.rotation.is_some(),
-        c.mesh.is_some(),
-    ];
-    for ((key, shapes), here) in SHAPE_KEYS.iter().zip(present) {
-        if here && !shapes.contains(&shape) {
-            return Err(file_err(format!(
-                "{what}`{key}` is not a key of a {shape} (it belongs to {})",
-                shapes.join(", ")
-            )));
-        }
-    }
-    let need = |key: &str| file_err(format!("{what}missing field `{key}`"));
-    let v3 = |key: &str, v: Option<[f64; 3]>| -> Result<Vec3> {
-        finite3(&what, key, v.ok_or_else(|| need(key))?).map_err(file_err)
-    };
-    let radius = || -> Result<f64> {
-        positive(&what, "radius", c.radius.ok_or_else(|| need("radius"))?).map_err(file_err)
-    };
-    let shape = match shape {
-        "plane" => {
-            let point = v3("point", c.point)?;
-            let normal = v3("normal", c.normal)?;
-            if normal.length() == 0.0 {
-                return Err(file_err(format!("{what}normal must be a non-zero vector")));
-            }
-            Shape::Plane { point, normal }
-        }
-        "sphere" => Shape::Sphere {
-            center: v3("center", c.center)?,
-            radius: radius()?,
-        },
-        "capsule" => Shape::Capsule {
-            a: v3("a", c.a)?,
-            b: v3("b", c.b)?,
-            radius: radius()?,
-        },
-        "box" => {
-            let center = v3("center", c.center)?;
-            let h = c.half_extents.ok_or_else(|| need("half_extents"))?;
-            if !h.iter().all(|&e| e > 0.0 && e.is_finite()) {
-                return Err(file_err(format!(
-                    "{what}half_extents must be three finite numbers > 0, got [{}, {}, {}]",
-                    h[0], h[1], h[2]
-                )));
-            }
-            let q = c.rotation.unwrap_or([0.0, 0.0, 0.0, 1.0]);
-            let len = q.iter().map(|e| e * e).sum::<f64>().sqrt();
-            if !(len > 0.0 && len.is_finite()) {
-                return Err(file_err(format!(
-                    "{what}rotation must be a finite non-zero quaternion [x, y, z, w], got [{}, {}, {}, {}]",
-                    q[0], q[1], q[2], q[3]
-                )));
-            }
-            Shape::Box {
-                center,
-                half_extents: Vec3::from_array(h),
-                rotation: glam::DQuat::from_xyzw(q[0] / len, q[1] / len, q[2] / len, q[3] / len),
-            }
-        }
-        _ => {
-            // the pivot: the file's origin unless `center` says otherwise (checked before the
-            // file is read)
-            let pivot = match c.center {
-                Some(p) => v3("center", Some(p))?,
-                None => Vec3::ZERO,
-            };
-            let name = c.mesh.as_ref().ok_or_else(|| need("mesh"))?;
-            let mesh_path = dir.join(name);
-            let mesh = crate::io::obj::read_obj(&mesh_path).map_err(|e| match e {
-                Error::Io { path: p, cause } => Error::input(
-                    path.display(),
-                    format!("{what}mesh: cannot read '{p}': {cause}"),
-                ),
-                other => other,
-            })?;
-            if mesh.faces.is_empty() {
-                return Err(file_err(format!(
-                    "{what}mesh '{}' has no faces (a mesh collider needs triangles or quads)",
-                    mesh_path.display()
-                )));
-            }
-            let triangles = mesh.triangles();
-            Shape::Mesh(TriangleMesh::new(mesh.positions, triangles).with_pivot(pivot))
-        }
-    };
-    let friction = match c.friction {
-        Some(f) => nonneg(&what, "friction", f).map_err(file_err)?,
-        None => default_friction,
-    };
-    let motion = RigidMotion {
-        velocity: finite3(&what, "velocity", c.velocity.unwrap_or([0.0; 3])).map_err(file_err)?,
-        angular_velocity: finite3(
-            &what,
-            "angular_velocity",
-            c.angular_velocity.unwrap_or([0.0; 3]),
-        )
-        .map_err(file_err)?,
-    };
-    Ok(Obstacle {
-        collider: Collider { shape, motion },
-        friction,
-    })
 }
 
 fn grid_mesh(g: &GridTable, what: &str) -> std::result::Result<Mesh, String> {
@@ -890,11 +715,13 @@ pin = [0, 2]
         assert_eq!(s.obstacles[0].friction, 0.5);
         assert_eq!(s.obstacles[1].friction, 0.3);
         assert_eq!(
-            s.obstacles[0].collider.motion.angular_velocity,
+            s.obstacles[0].collider.motion.velocity(0.0).1,
             Vec3::new(0.0, 3.0, 0.0)
         );
         match &s.obstacles[1].collider.shape {
-            Shape::Box { rotation, .. } => assert_eq!(*rotation, glam::DQuat::IDENTITY),
+            crate::collision::colliders::Shape::Box(b) => {
+                assert_eq!(b.rotation, glam::DQuat::IDENTITY)
+            }
             other => panic!("{other:?}"),
         }
         let m = s.model().unwrap();
@@ -918,20 +745,20 @@ pin = [0, 2]
             ("[collision]\nfriction = nan\n".to_string(), "collision.friction: must be a finite number ≥ 0, got NaN"),
             ("[collision]\nstiffness = 0\n".to_string(), "collision.stiffness"),
             ("[collision]\nthicknes = 1\n".to_string(), "unknown field `thicknes`"),
-            (sphere.replace("0.5", "-0.5"), "collider[0] (sphere): radius must be a finite number > 0, got -0.5"),
-            (sphere.replace("sphere", "cone"), "collider[0]: unknown shape 'cone'"),
-            (sphere.replace("center = [0, 1, 0]\n", ""), "collider[0] (sphere): missing field `center`"),
-            (format!("{sphere}friction = -1\n"), "collider[0] (sphere): friction must be a finite number ≥ 0, got -1"),
-            (format!("{sphere}normal = [0, 1, 0]\n"), "collider[0] (sphere): `normal` is not a key of a sphere"),
-            (format!("{sphere}spin = 1\n"), "unknown field `spin`"),
-            (format!("{sphere}velocity = [0, inf, 0]\n"), "collider[0] (sphere): velocity must be finite"),
-            ("[[collider]]\nshape = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 0]\n".into(), "collider[0] (plane): normal must be a non-zero vector"),
-            ("[[collider]]\nshape = \"box\"\ncenter = [0, 0, 0]\nhalf_extents = [1, 0, 1]\n".into(), "collider[0] (box): half_extents must be three finite numbers > 0"),
-            ("[[collider]]\nshape = \"box\"\ncenter = [0, 0, 0]\nhalf_extents = [1, 1, 1]\nrotation = [0, 0, 0, 0]\n".into(), "collider[0] (box): rotation must be a finite non-zero quaternion"),
-            ("[[collider]]\nshape = \"mesh\"\nmesh = \"nope.obj\"\n".into(), "collider[0] (mesh): mesh: cannot read 'dir/nope.obj'"),
-            ("[[collider]]\nshape = \"mesh\"\nmesh = \"nope.obj\"\ncenter = [0, nan, 0]\n".into(), "collider[0] (mesh): center must be finite, got [0, NaN, 0]"),
+            (sphere.replace("0.5", "-0.5"), "line 16, collider[0].radius: must be a finite number > 0, got -0.5"),
+            (sphere.replace("sphere", "cone"), "collider[0].shape: unknown shape 'cone', expected one of \"plane\", \"sphere\", \"capsule\", \"box\", \"mesh\""),
+            (sphere.replace("center = [0, 1, 0]\n", ""), "collider[0].center: missing (this shape needs it)"),
+            (format!("{sphere}friction = -1\n"), "line 17, collider[0].friction: must be a finite number ≥ 0, got -1"),
+            (format!("{sphere}normal = [0, 1, 0]\n"), "collider[0].normal: not a key of a sphere (it belongs to plane)"),
+            (format!("{sphere}spin = 1\n"), "collider[0].spin: unknown key of [[collider]]"),
+            (format!("{sphere}velocity = [0, inf, 0]\n"), "collider[0].velocity: must be finite, got [0, inf, 0]"),
+            ("[[collider]]\nshape = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 0]\n".into(), "collider[0].normal: must be a non-zero vector"),
+            ("[[collider]]\nshape = \"box\"\ncenter = [0, 0, 0]\nhalf_extents = [1, 0, 1]\n".into(), "collider[0].half_extents: must be three finite numbers > 0, got [1, 0, 1]"),
+            ("[[collider]]\nshape = \"box\"\ncenter = [0, 0, 0]\nhalf_extents = [1, 1, 1]\nrotation = [0, 0, 0, 0]\n".into(), "collider[0].rotation: must be a finite non-zero quaternion [x, y, z, w], got [0, 0, 0, 0]"),
+            ("[[collider]]\nshape = \"mesh\"\nmesh = \"nope.obj\"\n".into(), "collider[0].mesh: cannot read 'dir/nope.obj'"),
+            ("[[collider]]\nshape = \"mesh\"\nmesh = \"nope.obj\"\ncenter = [0, nan, 0]\n".into(), "collider[0].center: must be finite, got [0, NaN, 0]"),
             ("[[collider]]\nshape = \"mesh\"\nmesh = \"nope.obj\"\ncenter = [0, 0]\n".into(), "center"),
-            ("[[collider]]\nshape = \"capsule\"\na = [0, 0, 0]\nb = [1, 0, 0]\nradius = 0.1\ncenter = [0, 0, 0]\n".into(), "collider[0] (capsule): `center` is not a key of a capsule (it belongs to sphere, box, mesh)"),
+            ("[[collider]]\nshape = \"capsule\"\na = [0, 0, 0]\nb = [1, 0, 0]\nradius = 0.1\ncenter = [0, 0, 0]\n".into(), "collider[0].center: not a key of a capsule (it belongs to sphere, box, mesh)"),
         ];
         for (extra, want) in cases {
             let e = err(&format!("{BASE}\n{extra}"));

@@ -1,0 +1,134 @@
+//! The keys of one `[[collider]]` table as each collider kind reads them: typed getters whose
+//! errors are [`Error::Field`]s naming the key (`collider[0].radius`), which the scene loader
+//! words with the file and the line.
+
+use crate::error::{Error, Result};
+use crate::math::Vec3;
+use glam::DQuat;
+use std::path::{Path, PathBuf};
+
+/// One collider's table, its field path (`collider[0]`) and the folder its files are relative to.
+pub struct Keys<'a> {
+    table: &'a toml::Table,
+    field: String,
+    dir: &'a Path,
+}
+
+fn number(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(x) => Some(*x),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+impl<'a> Keys<'a> {
+    /// The keys of `table`, reported as `field.KEY`, files relative to `dir`.
+    pub fn new(table: &'a toml::Table, field: impl Into<String>, dir: &'a Path) -> Keys<'a> {
+        Keys {
+            table,
+            field: field.into(),
+            dir,
+        }
+    }
+
+    /// `collider[0]`.
+    pub fn field(&self) -> &str {
+        &self.field
+    }
+
+    /// `collider[0].key`.
+    pub fn path(&self, key: &str) -> String {
+        format!("{}.{key}", self.field)
+    }
+
+    /// An error about `key`.
+    pub fn error(&self, key: &str, message: impl Into<String>) -> Error {
+        Error::field(self.path(key), message)
+    }
+
+    /// True when the table has `key`.
+    pub fn has(&self, key: &str) -> bool {
+        self.table.contains_key(key)
+    }
+
+    fn get(&self, key: &str) -> Result<&'a toml::Value> {
+        self.table
+            .get(key)
+            .ok_or_else(|| self.error(key, "missing (this shape needs it)"))
+    }
+
+    fn numbers<const N: usize>(&self, key: &str, v: &toml::Value) -> Result<[f64; N]> {
+        let bad = || self.error(key, format!("must be an array of {N} numbers"));
+        let a = v.as_array().ok_or_else(bad)?;
+        if a.len() != N {
+            return Err(bad());
+        }
+        let mut out = [0.0; N];
+        for (o, x) in out.iter_mut().zip(a) {
+            *o = number(x).ok_or_else(bad)?;
+        }
+        Ok(out)
+    }
+
+    /// A required finite number.
+    pub fn number(&self, key: &str) -> Result<f64> {
+        number(self.get(key)?).ok_or_else(|| self.error(key, "must be a number"))
+    }
+
+    /// A required number > 0.
+    pub fn positive(&self, key: &str) -> Result<f64> {
+        crate::validate::positive(&self.path(key), self.number(key)?)
+    }
+
+    /// A required finite vector.
+    pub fn vec3(&self, key: &str) -> Result<Vec3> {
+        let a = self.numbers::<3>(key, self.get(key)?)?;
+        crate::validate::finite3(&self.path(key), Vec3::from_array(a))
+    }
+
+    /// An optional finite vector.
+    pub fn opt_vec3(&self, key: &str) -> Result<Option<Vec3>> {
+        self.has(key).then(|| self.vec3(key)).transpose()
+    }
+
+    /// An optional rotation `[x, y, z, w]`, normalized; zero or not finite is an error.
+    pub fn opt_quat(&self, key: &str) -> Result<Option<DQuat>> {
+        let Some(v) = self.table.get(key) else {
+            return Ok(None);
+        };
+        quat(&self.path(key), self.numbers::<4>(key, v)?).map(Some)
+    }
+
+    /// A required string.
+    pub fn string(&self, key: &str) -> Result<&'a str> {
+        self.get(key)?
+            .as_str()
+            .ok_or_else(|| self.error(key, "must be a string"))
+    }
+
+    /// A required file name, as a path relative to the scene's folder.
+    pub fn file(&self, key: &str) -> Result<PathBuf> {
+        Ok(self.dir.join(self.string(key)?))
+    }
+}
+
+/// `[x, y, z, w]` as a unit quaternion; an error naming `field` when zero or not finite.
+pub fn quat(field: &str, q: [f64; 4]) -> Result<DQuat> {
+    let len = q.iter().map(|e| e * e).sum::<f64>().sqrt();
+    if !(len > 0.0 && len.is_finite()) {
+        return Err(Error::field(
+            field,
+            format!(
+                "must be a finite non-zero quaternion [x, y, z, w], got [{}, {}, {}, {}]",
+                q[0], q[1], q[2], q[3]
+            ),
+        ));
+    }
+    Ok(DQuat::from_xyzw(
+        q[0] / len,
+        q[1] / len,
+        q[2] / len,
+        q[3] / len,
+    ))
+}
