@@ -194,7 +194,7 @@ impl Pc2Writer {
                 "{points} points are too many for PC2 (at most 2^31 − 1)"
             ));
         }
-        if !start_frame.is_finite() || !(sample_rate.is_finite() && sample_rate > 0.0) {
+        if !(start_frame.is_finite() && sample_rate.is_finite() && sample_rate > 0.0) {
             return invalid(format!(
                 "start frame {start_frame} and sample rate {sample_rate}: both must be finite, the rate > 0"
             ));
