@@ -5,6 +5,9 @@
 //! [`FrameWriter::finish`], at the end of the run. Writers see only the cloths (names and
 //! topology) and the positions, never the simulation, so a frame can be written while the next
 //! one is being stepped. Adding a format is one `Format` variant and one writer.
+//!
+//! A per-frame writer learns where the run starts from its first frame: frame 0 starts a new
+//! run, a later frame `k` continues a resumed one whose frames `0..k` are on disk.
 
 use clap::ValueEnum;
 use drapery::Vec3;
@@ -12,6 +15,7 @@ use drapery::collision::settings::Obstacle;
 use drapery::io::frames::frame_path;
 use drapery::io::gltf::{StaticMesh, write_glb_with};
 use drapery::io::obj::ObjWriter;
+use drapery::io::pc2::Pc2Writer;
 use drapery::io::ply::write_ply;
 use drapery::io::usd::write_usda;
 use drapery::model::ClothInfo;
@@ -28,6 +32,9 @@ pub enum Format {
     Usd,
     /// Binary little-endian PLY (f64 positions), one file per frame: DIR/frame_00000.ply, ….
     Ply,
+    /// PC2 point cache (f32 positions), one file per cloth: DIR/<cloth name>.pc2, a sample
+    /// appended per frame.
+    Pc2,
 }
 
 impl Format {
@@ -38,13 +45,14 @@ impl Format {
         }
     }
 
-    /// The name on the command line (`obj`, `glb`, `usd`, `ply`).
+    /// The name on the command line (`obj`, `glb`, `usd`, `ply`, `pc2`).
     pub fn name(self) -> &'static str {
         match self {
             Format::Obj => "obj",
             Format::Glb => "glb",
             Format::Usd => "usd",
             Format::Ply => "ply",
+            Format::Pc2 => "pc2",
         }
     }
 }
@@ -91,6 +99,82 @@ impl FrameWriter for PlyFrames {
     fn frame(&mut self, k: usize, cloths: &[ClothInfo], x: &[Vec3]) -> drapery::Result<()> {
         write_ply(&frame_path(&self.dir, k, "ply"), cloths, x)
     }
+}
+
+/// `DIR/<cloth name>.pc2`: one point cache per cloth, sample `k` = frame `k` (start frame 0,
+/// sample rate 1), the f32 of the positions. Each frame appends a sample to every cache; a
+/// resumed run first cuts the caches back to the frames before the one it starts with.
+struct Pc2Caches {
+    dir: PathBuf,
+    /// One per cloth, opened at the first frame.
+    caches: Vec<Pc2Writer>,
+}
+
+impl FrameWriter for Pc2Caches {
+    fn frame(&mut self, k: usize, cloths: &[ClothInfo], x: &[Vec3]) -> drapery::Result<()> {
+        if self.caches.is_empty() {
+            self.caches = cloths
+                .iter()
+                .map(|c| {
+                    let path = pc2_path(&self.dir, &c.name);
+                    let points = c.mesh.positions.len();
+                    match k {
+                        0 => Pc2Writer::create(&path, points, 0.0, 1.0),
+                        _ => Pc2Writer::open(&path, points, Some(k)),
+                    }
+                })
+                .collect::<drapery::Result<_>>()?;
+        }
+        for (cache, c) in self.caches.iter_mut().zip(cloths) {
+            let shown = cache.path().display();
+            let samples = cache.header().samples;
+            if samples != k {
+                return Err(drapery::Error::Invalid(format!(
+                    "{shown}: frame {k} would be sample {samples}"
+                )));
+            }
+            let Some(xc) = x.get(c.range()) else {
+                return Err(drapery::Error::Invalid(format!(
+                    "{shown}: the frame has {} positions, cloth '{}' needs {:?}",
+                    x.len(),
+                    c.name,
+                    c.range()
+                )));
+            };
+            cache.append(xc)?;
+        }
+        Ok(())
+    }
+}
+
+/// The file name of the point cache of the cloth `name`: `<name>.pc2`.
+pub fn pc2_file(name: &str) -> String {
+    format!("{name}.pc2")
+}
+
+fn pc2_path(dir: &Path, name: &str) -> PathBuf {
+    dir.join(pc2_file(name))
+}
+
+/// Checks, before anything is written, that every cloth name can name its file in the output
+/// folder: a format writing one file per cloth (pc2) refuses a name with a path separator.
+/// The error gives the cloth's field (`cloth[1].name: …`).
+pub fn check_cloth_names(formats: &[Format], cloths: &[ClothInfo]) -> drapery::Result<()> {
+    if !formats.contains(&Format::Pc2) {
+        return Ok(());
+    }
+    for (i, c) in cloths.iter().enumerate() {
+        if c.name.contains(['/', '\\', '\0']) {
+            return Err(drapery::Error::field(
+                format!("cloth[{i}].name"),
+                format!(
+                    "'{}' cannot name a file: --format pc2 writes DIR/<cloth name>.pc2",
+                    c.name
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// `DIR/<stem>.glb` or `DIR/<stem>.usda`, written once at the end from every frame. The glb
@@ -140,6 +224,10 @@ pub fn writer_for(
     match format {
         Format::Obj => Box::new(ObjFrames { dir, obj: None }),
         Format::Ply => Box::new(PlyFrames { dir }),
+        Format::Pc2 => Box::new(Pc2Caches {
+            dir,
+            caches: Vec::new(),
+        }),
         Format::Glb | Format::Usd => Box::new(WholeRun {
             format,
             path: dir.join(format!("{stem}.{}", format.extension())),

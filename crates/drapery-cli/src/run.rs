@@ -3,8 +3,9 @@
 //! Everything (formats, scene, meshes, model) is checked before the output folder is created.
 //! Frame `k` is the state at `k / frame_rate`, from frame 0 (the initial state) to the frame at
 //! `duration`. Output goes through the writers of [`crate::formats`]: per-frame formats (obj,
-//! ply) are written on the writer thread ([`crate::writer`]) while the next frame is stepped;
-//! whole-run formats (glb, usd) are written at the end.
+//! ply; pc2, which appends a sample per frame to one cache per cloth) are written on the
+//! writer thread ([`crate::writer`]) while the next frame is stepped; whole-run formats (glb,
+//! usd) are written at the end.
 //!
 //! For each frame the writer thread writes the frame's files, then (for whole-run formats) appends
 //! its positions to the history, then saves the run state (see [`crate::state`]), in that order,
@@ -12,7 +13,7 @@
 //! continues a killed run to the same bits. A folder holding another run is refused unless
 //! `--overwrite`.
 
-use crate::formats::{Format, FrameWriter, writer_for};
+use crate::formats::{Format, FrameWriter, check_cloth_names, pc2_file, writer_for};
 use crate::state::{HISTORY_FILE, History, RunState, STATE_FILE};
 use crate::writer::{Sink, Writer};
 use anyhow::{Context, Result, anyhow, bail};
@@ -36,7 +37,8 @@ pub struct RunArgs {
     pub output: PathBuf,
     /// Output formats, comma separated: `obj` and `ply` write one file per frame
     /// (DIR/frame_00000.obj, …), `glb` and `usd` one animation per run (DIR/<scene stem>.glb,
-    /// DIR/<scene stem>.usda, written at the end, also after a blow-up).
+    /// DIR/<scene stem>.usda, written at the end, also after a blow-up), `pc2` one point cache
+    /// per cloth (DIR/<cloth name>.pc2, a sample appended per frame).
     #[arg(
         short,
         long,
@@ -57,9 +59,9 @@ pub struct RunArgs {
     /// Starts from frame 0 when DIR holds no run yet.
     #[arg(long, conflicts_with = "overwrite")]
     pub resume: bool,
-    /// Replace what DIR holds: delete its frame_* files, state.bin, history.bin and the
-    /// scene's .glb/.usda first. Without --overwrite or --resume, a DIR that already holds
-    /// frames or a state file is refused.
+    /// Replace what DIR holds: delete its frame_* files, state.bin, history.bin, the
+    /// scene's .glb/.usda and its cloths' .pc2 first. Without --overwrite or --resume, a DIR
+    /// that already holds frames or a state file is refused.
     #[arg(long)]
     pub overwrite: bool,
     /// Testing: stop with an error after frame N is written (as if killed).
@@ -105,13 +107,14 @@ fn holds_a_run(dir: &Path) -> Result<bool> {
     Ok(false)
 }
 
-/// `--overwrite`: deletes frame files, the state, the history and the whole-run files of this
-/// scene and of the run recorded in the state.
-fn clear_run(dir: &Path, stem: &str) -> Result<()> {
+/// `--overwrite`: deletes frame files, the state, the history, the whole-run files of this
+/// scene and of the run recorded in the state, and the point caches of this scene's cloths.
+fn clear_run(dir: &Path, stem: &str, cloths: &[ClothInfo]) -> Result<()> {
     let Ok(rd) = std::fs::read_dir(dir) else {
         return Ok(());
     };
     let mut whole = vec![format!("{stem}.glb"), format!("{stem}.usda")];
+    whole.extend(cloths.iter().map(|c| pc2_file(&c.name)));
     if let Ok(Some(old)) = RunState::load(dir) {
         whole.push(format!("{}.glb", old.stem));
         whole.push(format!("{}.usda", old.stem));
@@ -209,7 +212,7 @@ impl Sink for RunOutput {
 
 /// Runs a scene.
 pub fn run(args: RunArgs) -> Result<()> {
-    // Canonical order (obj, glb, usd, ply), so that `glb,obj` resumes a run of `obj,glb`.
+    // Canonical order (obj, glb, usd, ply, pc2), so that `glb,obj` resumes a run of `obj,glb`.
     let mut formats: Vec<Format> = args.format.clone();
     formats.sort();
     formats.dedup();
@@ -230,6 +233,8 @@ pub fn run(args: RunArgs) -> Result<()> {
         .map(|f| f.name())
         .collect::<Vec<_>>()
         .join(",");
+    check_cloth_names(&formats, sim.model().cloths())
+        .map_err(|e| anyhow!("{}: {e}", args.scene.display()))?;
     let frames = scene.frame_count();
     let dir = &args.output;
     let stem = run_stem(&args.scene);
@@ -244,7 +249,7 @@ pub fn run(args: RunArgs) -> Result<()> {
     std::fs::create_dir_all(dir)
         .with_context(|| format!("{}: cannot create the output folder", dir.display()))?;
     if args.overwrite {
-        clear_run(dir, &stem)?;
+        clear_run(dir, &stem, sim.model().cloths())?;
     }
     let (mut whole_run, per_frame): (Vec<Box<dyn FrameWriter>>, Vec<_>) = formats
         .iter()

@@ -1,10 +1,12 @@
-//! File formats, one file per format (PLY, glTF and USD behind the `formats` feature). Every writer goes through [`write_atomic`]: a file is
+//! File formats, one file per format (PLY, glTF, USD and PC2 behind the `formats` feature). Every writer goes through [`write_atomic`]: a file is
 //! written whole (temporary file in the same folder, then rename) or not at all.
 
 pub mod frames;
 #[cfg(feature = "formats")]
 pub mod gltf;
 pub mod obj;
+#[cfg(feature = "formats")]
+pub mod pc2;
 #[cfg(feature = "formats")]
 pub mod ply;
 #[cfg(feature = "formats")]
