@@ -321,3 +321,23 @@ def test_the_ray_backend_writes_the_same_bytes_as_the_local_one(tmp_path, grid_s
     for r in records:
         for name in ("frames.npz", "scene.toml", "frame_00003.obj"):
             assert (out / r["id"] / name).read_bytes() == (local / r["id"] / name).read_bytes(), (r["id"], name)
+
+
+def test_a_scene_loaded_from_a_file_is_swept_from_that_file(tmp_path):
+    from drapery.sweep import _base_scene
+
+    path = tmp_path / "tiny.toml"
+    path.write_text(drapery.scene_toml(TINY))
+    assert _base_scene(drapery.load_scene(path)) == _base_scene(path) == TINY
+    with pytest.raises(TypeError, match="pass the dict"):
+        drapery.sweep(drapery.Scene.from_dict(TINY), {"cloth.sheet.damping": [0.1]}, tmp_path / "out")
+
+
+def test_the_sweep_module_type_checks_strictly(tmp_path):
+    r = subprocess.run(
+        [sys.executable, "-m", "mypy", "--strict", "--no-incremental", "-m", "drapery.sweep"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
+    assert r.returncode == 0, r.stdout + r.stderr

@@ -145,7 +145,7 @@ def _segments(path: str) -> List[str]:
     return path.split(".")
 
 
-def _element(items: list, seg: str, at: str) -> int:
+def _element(items: List[Any], seg: str, at: str) -> int:
     """The index in an array that `seg` selects: the table named `seg`, else index `seg`."""
     for i, item in enumerate(items):
         if isinstance(item, dict) and item.get("name") == seg:
@@ -214,7 +214,7 @@ class _Param:
     def __init__(self, path: str, spec: Any):
         _segments(path)
         self.path = path
-        self.values: Optional[list] = None
+        self.values: Optional[List[Any]] = None
         self.low = self.high = 0.0
         self.log = False
         if isinstance(spec, Mapping):
@@ -261,7 +261,7 @@ def _plan(params: Mapping[str, Any], samples: Optional[int], seed: int) -> Tuple
             raise ValueError("sweep: samples is the number of random draws of range parameters; these params are all lists (a grid)")
         draws = [[]]
     plan = []
-    for point in itertools.product(*(p.values for p in grid)):  # type: ignore[misc]
+    for point in itertools.product(*(p.values or [] for p in grid)):
         for draw in draws:
             values = dict(zip((p.path for p in grid), point))
             values.update(zip((p.path for p in ranges), draw))
@@ -464,7 +464,7 @@ def _progress(total: int, initial: int) -> Any:
     if not sys.stderr.isatty():
         return None
     try:
-        from tqdm import tqdm
+        from tqdm import tqdm  # type: ignore[import-not-found,import-untyped,unused-ignore]
     except ImportError:
         return None
     return tqdm(total=total, initial=initial, unit="sample", desc="drapery sweep")
@@ -514,7 +514,7 @@ def sweep(
     out = Path(output)
     out.mkdir(parents=True, exist_ok=True)
     width = max(4, len(str(len(plan) - 1)))
-    jobs = []
+    jobs: List[Dict[str, Any]] = []
     for i, values in enumerate(plan):
         s = copy.deepcopy(base)
         for path, v in values.items():
