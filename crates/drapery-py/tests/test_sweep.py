@@ -211,6 +211,15 @@ def test_resume_after_deleting_a_sample_reruns_only_that_sample(tmp_path, grid_s
     # the same bytes as the shared sweep of the same parameters
     shared, _ = grid_sweep
     assert all(data[i] == (shared / i / "frames.npz").read_bytes() for i in data)
+    # an interrupted sample (no done.json) runs again; so do the samples whose values changed
+    (out / "s0000" / "done.json").unlink()
+    changed = dict(GRID, **{"collider.0.friction": [0.0, 0.8]})
+    stamps = {i: f.stat().st_mtime_ns for i, f in files.items()}
+    third = drapery.sweep(copy.deepcopy(TINY), changed, out, workers=2)
+    rerun = {i for i, f in files.items() if f.stat().st_mtime_ns != stamps[i]}
+    assert rerun == {"s0000", "s0001", "s0003"}
+    assert [r["params"]["collider.0.friction"] for r in third] == [0.0, 0.8, 0.0, 0.8]
+    assert manifest(out) == third and all(r["status"] == "ok" for r in third)
 
 
 def test_an_unknown_key_path_is_one_error_before_anything_runs(tmp_path):
@@ -301,6 +310,13 @@ def _ray():
             raise
         pytest.skip("ray is not installed (pip install ray; DRAPERY_REQUIRE_RAY=1 makes this a failure)")
     return ray
+
+
+def test_the_ray_backend_without_ray_is_one_clear_error(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray fails
+    with pytest.raises(ImportError, match=r"drapery\[ray\]"):
+        drapery.sweep(copy.deepcopy(TINY), {"cloth.sheet.damping": [0.1]}, tmp_path, backend="ray")
+    assert not list(tmp_path.iterdir()), "nothing is written"
 
 
 @pytest.fixture(scope="module")

@@ -47,9 +47,10 @@ fails) is recorded as failed and the others go on.
 Backends: ``"local"``, a process pool of ``workers`` processes (default
 ``os.cpu_count() // cpus_per_task``); ``"ray"``, one Ray task per sample with ``num_cpus =
 cpus_per_task`` (``ray.init(address=ray_address)``, a local instance when None; an instance
-already initialised is used as it is), at most ``workers`` in flight when given. Each sample's
-steps run on ``cpus_per_task`` threads (the bits are the same whatever that number). Only this
-process writes the manifest, in sample order.
+already initialised is used as it is), at most ``workers`` in flight when given; on a cluster,
+``output`` and the scene's meshes must be on a file system every node sees, and drapery
+installed on every node. Each sample's steps run on ``cpus_per_task`` threads (the bits are the
+same whatever that number). Only this process writes the manifest, in sample order.
 """
 
 from __future__ import annotations
@@ -61,6 +62,7 @@ import itertools
 import json
 import math
 import multiprocessing
+import operator
 import os
 import random
 import shutil
@@ -252,8 +254,10 @@ def _plan(params: Mapping[str, Any], samples: Optional[int], seed: int) -> Tuple
     grid = [p for p in ps if p.values is not None]
     ranges = [p for p in ps if p.values is None]
     if ranges:
-        if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
+        if _count(samples) is None:
             raise ValueError(f"sweep: range parameters need samples (a count >= 1), got {samples!r}")
+        samples = _count(samples)
+        assert samples is not None
         rng = random.Random(seed)
         draws = [[p.draw(rng) for p in ranges] for _ in range(samples)]
     else:
@@ -267,6 +271,17 @@ def _plan(params: Mapping[str, Any], samples: Optional[int], seed: int) -> Tuple
             values.update(zip((p.path for p in ranges), draw))
             plan.append({p.path: values[p.path] for p in ps})
     return ps, plan
+
+
+def _count(n: Any) -> Optional[int]:
+    """`n` as a whole number >= 1 (int or numpy integer), or None."""
+    if isinstance(n, bool):
+        return None
+    try:
+        n = operator.index(n)
+    except TypeError:
+        return None
+    return n if n >= 1 else None
 
 
 def _hash(obj: Any) -> str:
@@ -387,17 +402,22 @@ def _lost(job: Dict[str, Any], e: BaseException) -> Dict[str, Any]:
     }
 
 
+def _import_ray() -> Any:
+    try:
+        import ray
+    except ImportError as e:
+        raise ImportError("backend='ray' needs Ray: pip install 'drapery[ray]' (or pip install ray)") from e
+    return ray
+
+
 def _ray(
+    ray: Any,
     jobs: List[Dict[str, Any]],
     workers: Optional[int],
     cpus_per_task: int,
     address: Optional[str],
     done: Callable[[Dict[str, Any], Dict[str, Any]], None],
 ) -> None:
-    try:
-        import ray
-    except ImportError as e:
-        raise ImportError("backend='ray' needs Ray: pip install 'drapery[ray]' (or pip install ray)") from e
     started = not ray.is_initialized()
     if started:
         ray.init(address=address)
@@ -502,14 +522,19 @@ def sweep(
     """
     if backend not in ("local", "ray"):
         raise ValueError(f"sweep: backend must be 'local' or 'ray', got {backend!r}")
-    if isinstance(cpus_per_task, bool) or not isinstance(cpus_per_task, int) or cpus_per_task < 1:
+    cpus = _count(cpus_per_task)
+    if cpus is None:
         raise ValueError(f"sweep: cpus_per_task must be a whole number >= 1, got {cpus_per_task!r}")
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
-        raise ValueError(f"sweep: workers must be a whole number >= 1 or None, got {workers!r}")
+    cpus_per_task = cpus
+    if workers is not None:
+        if _count(workers) is None:
+            raise ValueError(f"sweep: workers must be a whole number >= 1 or None, got {workers!r}")
+        workers = _count(workers)
     formats = _formats(frames)
     base = _base_scene(scene)
     ps, plan = _plan(params, samples, seed)
     _check_paths(base, ps, plan[0])
+    ray = _import_ray() if backend == "ray" else None
 
     out = Path(output)
     out.mkdir(parents=True, exist_ok=True)
@@ -571,7 +596,7 @@ def sweep(
     try:
         if pending:
             if backend == "ray":
-                _ray(pending, workers, cpus_per_task, ray_address, done)
+                _ray(ray, pending, workers, cpus_per_task, ray_address, done)
             else:
                 _local(pending, workers or max(1, (os.cpu_count() or 1) // cpus_per_task), done)
     finally:
