@@ -229,6 +229,7 @@ def test_an_unknown_key_path_is_one_error_before_anything_runs(tmp_path):
         "collider.3.friction": "collider",
         "cloth.sheet.bend_stifness": "bend_stifness",
         "cloth.sheet.density.x": "density",
+        "simulaton.duration": "simulaton",
     }
     for path, named in cases.items():
         with pytest.raises(ValueError, match=named):

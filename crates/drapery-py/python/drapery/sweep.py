@@ -65,6 +65,7 @@ import multiprocessing
 import operator
 import os
 import random
+import re
 import shutil
 import sys
 import time
@@ -182,9 +183,9 @@ def _assign(scene: Dict[str, Any], path: str, value: Any) -> None:
 
 
 def _unknown_key(message: str, path: str) -> bool:
-    """Whether the loader's message refuses the last key of `path` as unknown."""
-    key = path.rsplit(".", 1)[-1]
-    return "unknown field" in message and f"`{key}`" in message
+    """Whether the loader's message refuses a key of `path` as unknown."""
+    m = re.search(r"unknown field `([^`]*)`", message)
+    return m is not None and m.group(1) in path.split(".")
 
 
 def _check_paths(base: Dict[str, Any], params: "List[_Param]", first: Dict[str, Any]) -> None:
@@ -327,7 +328,6 @@ def _run_sample(job: Dict[str, Any]) -> Dict[str, Any]:
     failures)."""
     start = time.perf_counter()
     folder = Path(job["dir"])
-    record: Dict[str, Any] = {"id": job["id"], "params": job["params"], "params_hash": job["params_hash"]}
     try:
         if folder.exists():
             shutil.rmtree(folder)
@@ -354,14 +354,25 @@ def _run_sample(job: Dict[str, Any]) -> Dict[str, Any]:
                 "times": np.arange(len(frames), dtype=np.float64) / scene.frame_rate,
             },
         )
-        record["status"] = "ok"
-        record["wall_time"] = time.perf_counter() - start
+        record = _record(job, time.perf_counter() - start)
         _write_json(folder / DONE, {"id": job["id"], "scene_hash": job["scene_hash"], "params_hash": job["params_hash"], "frames": len(frames)})
+        return record
     except Exception as e:  # a failed sample is recorded; the sweep goes on
-        record["status"] = "failed"
-        record["wall_time"] = time.perf_counter() - start
-        record["error"] = str(e)
-        record["error_type"] = type(e).__name__
+        return _record(job, time.perf_counter() - start, e)
+
+
+def _record(job: Dict[str, Any], wall_time: float, error: Optional[BaseException] = None) -> Dict[str, Any]:
+    """A sample's manifest line: ok, or failed with `error`."""
+    record: Dict[str, Any] = {
+        "id": job["id"],
+        "params": job["params"],
+        "params_hash": job["params_hash"],
+        "status": "ok" if error is None else "failed",
+        "wall_time": wall_time,
+    }
+    if error is not None:
+        record["error"] = str(error)
+        record["error_type"] = type(error).__name__
     return record
 
 
@@ -382,24 +393,12 @@ def _local(jobs: List[Dict[str, Any]], workers: int, done: Callable[[Dict[str, A
                     try:
                         record = f.result()
                     except Exception as e:  # the worker process died
-                        record = _lost(job, e)
+                        record = _record(job, 0.0, e)
                     done(job, record)
         except BaseException:
             for f in futures:
                 f.cancel()
             raise
-
-
-def _lost(job: Dict[str, Any], e: BaseException) -> Dict[str, Any]:
-    return {
-        "id": job["id"],
-        "params": job["params"],
-        "params_hash": job["params_hash"],
-        "status": "failed",
-        "wall_time": 0.0,
-        "error": f"the worker running it failed: {e}",
-        "error_type": type(e).__name__,
-    }
 
 
 def _import_ray() -> Any:
@@ -435,7 +434,7 @@ def _ray(
                 try:
                     record = ray.get(ref)
                 except Exception as e:  # the task or its worker died
-                    record = _lost(job, e)
+                    record = _record(job, 0.0, e)
                 done(job, record)
                 for nxt in itertools.islice(queue, 1):
                     running[task.remote(nxt)] = nxt
