@@ -242,10 +242,14 @@ def test_an_unknown_key_path_is_one_error_before_anything_runs(tmp_path):
 
 
 def test_a_key_absent_from_the_base_scene_can_be_swept(tmp_path):
-    records = drapery.sweep(copy.deepcopy(TINY), {"solver.tolerance": [1e-4], "cloth.sheet.damping": [0.02]}, tmp_path, workers=1)
+    params = {"solver.tolerance": [1e-4], "cloth.sheet.damping": [0.02], "cloth.sheet.grid.center.1": [0.25]}
+    records = drapery.sweep(copy.deepcopy(TINY), params, tmp_path, workers=1)
     assert records[0]["status"] == "ok", records[0]
     scene = tomllib.loads((tmp_path / "s0000" / "scene.toml").read_text())
     assert scene["solver"]["tolerance"] == 1e-4 and scene["cloth"][0]["damping"] == 0.02
+    assert scene["cloth"][0]["grid"]["center"] == [0.0, 0.25, 0.0]  # an array's component
+    with np.load(tmp_path / "s0000" / "frames.npz") as z:
+        assert abs(z["positions"][0, :, 1].mean() - 0.25) < 1e-6  # the sheet starts there
 
 
 def test_command_line_parameters():

@@ -1,57 +1,5 @@
-"""Data-set sweeps: one scene, many parameter values, one folder per sample.
-
-``drapery.sweep(scene, params, output)`` (and the console command ``drapery-sweep``) runs a
-scene once per parameter sample and writes, for sample ``sNNNN``::
-
-    output/manifest.jsonl           one JSON line per sample, in sample order
-    output/sNNNN/scene.toml         the sample's scene (mesh paths absolute: `drapery run` runs it)
-    output/sNNNN/frame_00000.obj …  its frames, as `drapery run` writes them (``frames=``)
-    output/sNNNN/frames.npz         positions float32 [frames, vertices, 3] and faces
-    output/sNNNN/done.json          written last: the sample is complete
-
-Parameters
-----------
-A parameter is a key path into the scene, its segments separated by dots: table names
-(``collision.friction``, ``solver.tolerance``), and in an array of tables (``[[cloth]]``,
-``[[collider]]``) the element whose ``name`` is the segment, else the element at that index
-(``cloth.sheet.bend_stiffness``, ``collider.0.friction``); an index also selects an array's
-component (``cloth.sheet.grid.center.1``). A missing table or key is created (a default can be
-swept); a path into a table that does not exist (no such cloth, index out of range) or a key
-that the scene format does not know is a ``ValueError`` before anything runs.
-
-Each parameter's value is a list (grid) or a range ``{"low": a, "high": b, "log": False}``
-(random). The samples are the Cartesian product of the lists (in ``params`` order, the last one
-varying fastest); ranges are drawn ``samples`` times (``random.Random(seed)``, uniform, or
-log-uniform when ``log``), and when both are given every grid point is combined with the same
-``samples`` draws (``grid × samples`` samples, the draws varying fastest). ``samples`` is
-required with ranges and refused without.
-
-Sample ids are ``s0000``, ``s0001``, … in that order (wider past 10000 samples), so the same
-``params``, ``samples`` and ``seed`` give the same ids and values; the manifest also carries a
-hash of the parameter values.
-
-``frames.npz``: ``positions`` (float32 [frames, vertices, 3], frame 0 the initial state, every
-cloth's vertices concatenated in scene order), ``faces`` (int64 [m, 3], triangles indexing
-those rows), ``cloths`` (the names) and ``offsets`` (int64 [cloths + 1]: cloth i is rows
-``offsets[i]:offsets[i+1]``), ``times`` (float64 [frames], s). Written with fixed zip
-timestamps, so the same sample gives the same bytes on any backend.
-
-Manifest lines: ``{"id", "params", "params_hash", "status": "ok" | "failed", "wall_time" (s),
-"error" and "error_type" when failed}``.
-
-Resume: running the same sweep into the same folder again skips every sample whose ``done.json``
-matches its scene and whose manifest line says ``ok``; failed and incomplete samples run again
-(their folder is emptied first). A failing sample (a scene the library refuses, a step that
-fails) is recorded as failed and the others go on.
-
-Backends: ``"local"``, a process pool of ``workers`` processes (default
-``os.cpu_count() // cpus_per_task``); ``"ray"``, one Ray task per sample with ``num_cpus =
-cpus_per_task`` (``ray.init(address=ray_address)``, a local instance when None; an instance
-already initialised is used as it is), at most ``workers`` in flight when given; on a cluster,
-``output`` and the scene's meshes must be on a file system every node sees, and drapery
-installed on every node. Each sample's steps run on ``cpus_per_task`` threads (the bits are the
-same whatever that number). Only this process writes the manifest, in sample order.
-"""
+"""Data-set sweeps: ``drapery.sweep`` (documented there: ``help(drapery.sweep)``) and the
+console command ``drapery-sweep`` (``main``; ``drapery-sweep --help``)."""
 
 from __future__ import annotations
 
@@ -509,15 +457,63 @@ def sweep(
     ``output`` and returns the manifest's records, in sample order.
 
     ``params``: key path -> list of values (grid) or ``{"low", "high", "log"}`` range (random,
-    ``samples`` draws with ``seed``); see the module's documentation for paths, sample order,
-    the files written and resuming. ``backend``: ``"local"`` (a process pool of ``workers``) or
-    ``"ray"`` (``ray_address``; ``workers`` limits the tasks in flight). ``cpus_per_task``:
-    threads per sample. ``frames``: the frame files, ``["obj"]`` (default), ``["ply"]``,
+    ``samples`` draws with ``seed``); paths, sample order, files and resuming below.
+    ``backend``: ``"local"`` (a process pool of ``workers``) or ``"ray"`` (``ray_address``;
+    ``workers`` limits the tasks in flight). ``cpus_per_task``: threads per sample. ``frames``: the frame files, ``["obj"]`` (default), ``["ply"]``,
     both, or ``[]`` / ``"none"`` for frames.npz alone.
 
     Raises ValueError for a bad parameter (unknown key path, empty list, bad range) and
     SceneError for a base scene that cannot be read, before anything runs; a sample that fails
     is a ``"failed"`` record.
+
+    Files, for sample ``sNNNN`` (the command ``drapery-sweep`` writes the same)::
+
+        output/manifest.jsonl           one JSON line per sample, in sample order
+        output/sNNNN/scene.toml         the sample's scene (mesh paths absolute: `drapery run` runs it)
+        output/sNNNN/frame_00000.obj …  its frames, as `drapery run` writes them (``frames=``)
+        output/sNNNN/frames.npz         positions float32 [frames, vertices, 3] and faces
+        output/sNNNN/done.json          written last: the sample is complete
+
+    Key paths: a parameter is a key path into the scene, its segments separated by dots: table names
+    (``collision.friction``, ``solver.tolerance``), and in an array of tables (``[[cloth]]``,
+    ``[[collider]]``) the element whose ``name`` is the segment, else the element at that index
+    (``cloth.sheet.bend_stiffness``, ``collider.0.friction``); an index also selects an array's
+    component (``cloth.sheet.grid.center.1``). A missing table or key is created (a default can be
+    swept); a path into a table that does not exist (no such cloth, index out of range) or a key
+    that the scene format does not know is a ``ValueError`` before anything runs.
+
+    Each parameter's value is a list (grid) or a range ``{"low": a, "high": b, "log": False}``
+    (random). The samples are the Cartesian product of the lists (in ``params`` order, the last one
+    varying fastest); ranges are drawn ``samples`` times (``random.Random(seed)``, uniform, or
+    log-uniform when ``log``), and when both are given every grid point is combined with the same
+    ``samples`` draws (``grid × samples`` samples, the draws varying fastest). ``samples`` is
+    required with ranges and refused without.
+
+    Sample ids are ``s0000``, ``s0001``, … in that order (wider past 10000 samples), so the same
+    ``params``, ``samples`` and ``seed`` give the same ids and values; the manifest also carries a
+    hash of the parameter values.
+
+    ``frames.npz``: ``positions`` (float32 [frames, vertices, 3], frame 0 the initial state, every
+    cloth's vertices concatenated in scene order), ``faces`` (int64 [m, 3], triangles indexing
+    those rows), ``cloths`` (the names) and ``offsets`` (int64 [cloths + 1]: cloth i is rows
+    ``offsets[i]:offsets[i+1]``), ``times`` (float64 [frames], s). Written with fixed zip
+    timestamps, so the same sample gives the same bytes on any backend.
+
+    Manifest lines: ``{"id", "params", "params_hash", "status": "ok" | "failed", "wall_time" (s),
+    "error" and "error_type" when failed}``.
+
+    Resume: running the same sweep into the same folder again skips every sample whose ``done.json``
+    matches its scene and whose manifest line says ``ok``; failed and incomplete samples run again
+    (their folder is emptied first). A failing sample (a scene the library refuses, a step that
+    fails) is recorded as failed and the others go on.
+
+    Backends: ``"local"``, a process pool of ``workers`` processes (default
+    ``os.cpu_count() // cpus_per_task``); ``"ray"``, one Ray task per sample with ``num_cpus =
+    cpus_per_task`` (``ray.init(address=ray_address)``, a local instance when None; an instance
+    already initialised is used as it is), at most ``workers`` in flight when given; on a cluster,
+    ``output`` and the scene's meshes must be on a file system every node sees, and drapery
+    installed on every node. Each sample's steps run on ``cpus_per_task`` threads (the bits are the
+    same whatever that number). Only this process writes the manifest, in sample order.
     """
     if backend not in ("local", "ray"):
         raise ValueError(f"sweep: backend must be 'local' or 'ray', got {backend!r}")
