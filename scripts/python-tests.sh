@@ -5,8 +5,10 @@
 #   scripts/python-tests.sh [PYTEST ARGS...]
 #
 # - The virtual environment is $DRAPERY_PY_VENV (default target/py-venv), created on first use
-#   with python3 (or $PYTHON); maturin, numpy, pytest and mypy (its stubtest checks the type
-#   stubs against the module) come from PyPI.
+#   with python3 (or $PYTHON); maturin, numpy, pytest, mypy (its stubtest checks the type
+#   stubs against the module), ray (the sweeps' Ray backend; about 20 s to install, 500 MB with
+#   its dependencies) and tomli (Python < 3.11) come from PyPI. DRAPERY_REQUIRE_RAY=1: the Ray
+#   tests fail instead of skipping when ray cannot be imported.
 # - The package is installed the way a user installs it, `pip install ./crates/drapery-py`
 #   (maturin builds the extension in release mode into the workspace's target/).
 # - The tests compare with the drapery command's output, so target/release/drapery is built
@@ -29,7 +31,9 @@ fi
 # maturin (the build backend, used without build isolation) from the venv
 export PATH="$venv/bin:$PATH"
 pip=("$venv/bin/python" -m pip --disable-pip-version-check --quiet)
-"${pip[@]}" install --upgrade "pip>=23" "maturin>=1.9.4,<2" numpy pytest mypy
+"${pip[@]}" install --upgrade "pip>=23" "maturin>=1.9.4,<2" numpy pytest mypy "ray>=2" \
+  "tomli>=1.1; python_version<'3.11'"
+export DRAPERY_REQUIRE_RAY=1
 
 cargo build --release --workspace --quiet
 echo "python-tests: building and installing crates/drapery-py" >&2

@@ -1,7 +1,7 @@
 """Type stubs of the native module drapery._drapery (re-exported by drapery)."""
 
 import os
-from typing import Any, Dict, Mapping, Optional, Sequence, Union, final
+from typing import Any, Callable, Dict, Mapping, Optional, Sequence, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -15,6 +15,7 @@ __all__ = [
     "StateError",
     "load_scene",
     "run",
+    "scene_toml",
     "__version__",
 ]
 
@@ -123,6 +124,13 @@ def run(
     output: _StrPath,
     formats: Union[Sequence[str], str, None] = None,
     threads: Optional[int] = None,
+    on_frame: Optional[Callable[[int, npt.NDArray[np.float64]], object]] = None,
 ) -> None:
     """Simulates ``scene`` and writes frame_00000.obj … into ``output`` as ``drapery run`` does
-    (byte for byte); formats "obj" (default) and/or "ply"."""
+    (byte for byte); formats "obj" (default) and/or "ply". ``on_frame(k, positions)`` is called
+    after frame k is written, with every particle's positions (float64, (n, 3)); with
+    ``formats=[]`` and ``on_frame`` no file is written."""
+
+def scene_toml(d: Mapping[str, Any]) -> str:
+    """The TOML text of a scene dict, as ``Scene.from_dict`` reads it (not checked as a scene);
+    mesh paths are written as given."""

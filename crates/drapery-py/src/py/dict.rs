@@ -14,6 +14,15 @@ use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 
 pub use crate::messages::DICT_PATH;
 
+/// The TOML text of a scene dict: what `Scene.from_dict(d)` reads, to be saved as a scene file
+/// (mesh paths are written as given: relative ones are then relative to that file's folder).
+/// Raises SceneError as `from_dict` does for values a scene cannot hold; the scene itself is
+/// not checked.
+#[pyfunction]
+pub fn scene_toml(d: &Bound<'_, PyAny>) -> PyResult<String> {
+    scene_text(d)
+}
+
 /// The TOML text of a scene dict.
 pub fn scene_text(d: &Bound<'_, PyAny>) -> PyResult<String> {
     let Ok(d) = d.cast::<PyDict>() else {

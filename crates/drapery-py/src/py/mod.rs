@@ -13,6 +13,8 @@ mod sim;
 #[pyo3::pymodule]
 mod _drapery {
     #[pymodule_export]
+    use super::dict::scene_toml;
+    #[pymodule_export]
     use super::errors::{DraperyError, SceneError, SimulationError, StateError};
     #[pymodule_export]
     use super::run::run;

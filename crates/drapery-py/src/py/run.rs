@@ -1,7 +1,8 @@
-//! `drapery.run(scene, output, formats=["obj"], threads=None)`: the CLI's `drapery run` from
-//! Python (the frame loop of [`crate::frames`]), with the GIL released while stepping and
-//! Ctrl-C checked between frames.
+//! `drapery.run(scene, output, formats=["obj"], threads=None, on_frame=None)`: the CLI's
+//! `drapery run` from Python (the frame loop of [`crate::frames`]), with the GIL released while
+//! stepping and Ctrl-C checked between frames; `on_frame(k, positions)` sees every frame.
 
+use super::arrays::vec3_array;
 use super::errors::{scene_error, simulation_error};
 use super::scene::{PyScene, load_scene};
 use super::sim::pool;
@@ -31,16 +32,20 @@ fn py_error(e: RunError) -> PyErr {
 /// folder `output` as `drapery run` does: frame_00000.obj (the initial state) to the last
 /// frame, byte for byte the CLI's files. `formats`: "obj" and/or "ply" (a list, or one string
 /// "obj,ply"). Existing frame files of the same names are replaced; no resume state is
-/// written (use the drapery command for --resume, glb and usd). Raises SceneError,
-/// SimulationError ("frame k: ...; frames 0 to k-1 are in DIR") or OSError.
+/// written (use the drapery command for --resume, glb and usd). `on_frame(k, positions)`, when
+/// given, is called after frame k is written with its positions (a new float64 array (n, 3),
+/// every particle) — the data of the files without reading them back; with `formats=[]` no
+/// file is written. Raises SceneError, SimulationError ("frame k: ...; frames 0 to k-1 are in
+/// DIR"), OSError, or what `on_frame` raises (the run stops there).
 #[pyfunction]
-#[pyo3(signature = (scene, output, formats = None, threads = None))]
+#[pyo3(signature = (scene, output, formats = None, threads = None, on_frame = None))]
 pub fn run(
     py: Python<'_>,
     scene: &Bound<'_, PyAny>,
     output: PathBuf,
     formats: Option<&Bound<'_, PyAny>>,
     threads: Option<usize>,
+    on_frame: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<()> {
     let names: Vec<String> = match formats {
         None => vec!["obj".into()],
@@ -51,7 +56,11 @@ pub fn run(
             .collect(),
         Some(f) => f.extract()?,
     };
-    let formats = FrameFormat::parse_list(&names).map_err(PyValueError::new_err)?;
+    let formats = if names.is_empty() && on_frame.is_some() {
+        Vec::new()
+    } else {
+        FrameFormat::parse_list(&names).map_err(PyValueError::new_err)?
+    };
     let scene: PyScene = match scene.cast::<PyScene>() {
         Ok(s) => PyScene {
             loaded: s.get().loaded.clone(),
@@ -63,13 +72,23 @@ pub fn run(
     let mut frames = py
         .detach(|| in_pool(&pool, || FrameRun::start(s, &output, &formats)))
         .map_err(py_error)?;
+    let seen = |k: usize, frames: &FrameRun| -> PyResult<()> {
+        match on_frame {
+            Some(f) => f
+                .call1((k, vec3_array(py, frames.simulation().positions())?))
+                .map(drop),
+            None => Ok(()),
+        }
+    };
+    seen(0, &frames)?;
     loop {
         py.check_signals()?;
         let next = py
             .detach(|| in_pool(&pool, || frames.next_frame()))
             .map_err(py_error)?;
-        if next.is_none() {
-            return Ok(());
+        match next {
+            Some(k) => seen(k, &frames)?,
+            None => return Ok(()),
         }
     }
 }
