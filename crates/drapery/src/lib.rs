@@ -19,6 +19,7 @@
 // `unsafe` only in the AVX block kernels (`linalg::block::avx`, `linalg::sym::avx`), which allow it
 #![deny(unsafe_code)]
 
+pub mod animation;
 pub mod collision;
 pub mod constraints;
 pub mod error;
