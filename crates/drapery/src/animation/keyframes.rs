@@ -293,7 +293,7 @@ impl Track {
     /// that starts there. NaN counts as before the first key.
     #[inline]
     fn place(&self, t: f64) -> Place<'_> {
-        if !(t >= self.first_time()) {
+        if t.is_nan() || t < self.first_time() {
             return Place::Before;
         }
         if t >= self.last_time() {
@@ -429,7 +429,7 @@ fn unit_quaternion(field: &str, q: DQuat) -> Result<DQuat> {
     }
     let len = q.length();
     let u = q / len;
-    if !(len > 0.0) || !u.is_finite() {
+    if len == 0.0 || !u.is_finite() {
         return Err(Error::field(
             field,
             format!(
