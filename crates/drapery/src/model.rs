@@ -60,6 +60,8 @@ pub struct ClothDesc {
     pub pins: Vec<u32>,
     /// Initial velocity of every vertex, m/s.
     pub initial_velocity: Vec3,
+    /// Handles: vertices that follow a prescribed motion (moving pins).
+    pub handles: Vec<crate::constraints::handles::HandleDesc>,
 }
 
 /// What kind of mesh feature a spring was generated from.
@@ -165,6 +167,8 @@ pub struct Model {
     pub(crate) collision: Option<crate::collision::settings::CollisionSettings>,
     /// Obstacles (used when `collision` is set).
     pub(crate) obstacles: Vec<crate::collision::settings::Obstacle>,
+    /// Handles of every cloth (global particle indices).
+    pub(crate) handles: Vec<crate::constraints::handles::Handle>,
 }
 
 /// `values` has one finite entry per particle (`n`).
@@ -215,6 +219,7 @@ impl Model {
             v: Vec::new(),
             mass: Vec::new(),
             pinned: Vec::new(),
+            handles: Vec::new(),
             drag: Vec::new(),
             springs: Springs::default(),
             gravity,
@@ -232,6 +237,50 @@ impl Model {
             ));
         }
         Ok(m)
+    }
+
+    /// Adds the handles of the cloth whose particles start at `offset` (positions already in
+    /// `self.x`), places their vertices where their motion puts them at `t = 0` and gives them
+    /// its velocity there. A vertex may belong to one handle at most, and not to `pin`.
+    fn add_handles(
+        &mut self,
+        descs: &[crate::constraints::handles::HandleDesc],
+        pinned: &[bool],
+        offset: usize,
+        at: &str,
+    ) -> Result<()> {
+        use crate::constraints::handles::Handle;
+        let mut owner: Vec<Option<usize>> = vec![None; pinned.len()];
+        for (k, d) in descs.iter().enumerate() {
+            let field = format!("{at}.handle[{k}]");
+            let hd = Handle::new(d, &self.x[offset..], offset as u32, &field)?;
+            for &v in &d.vertices {
+                let v = v as usize;
+                if pinned[v] {
+                    return Err(Error::field(
+                        format!("{field}.vertices"),
+                        format!(
+                            "vertex {v} is also in `pin` (a vertex is pinned or in a handle, not both)"
+                        ),
+                    ));
+                }
+                if let Some(j) = owner[v].replace(k) {
+                    return Err(Error::field(
+                        format!("{field}.vertices"),
+                        format!("vertex {v} is already in {at}.handle[{j}]"),
+                    ));
+                }
+            }
+            let (lin, ang) = hd.motion.velocity(0.0);
+            let (_, tr) = hd.motion.pose(0.0);
+            for (k, &p) in hd.particles.iter().enumerate() {
+                let x = hd.position(k, 0.0);
+                self.x[p as usize] = x;
+                self.v[p as usize] = lin + ang.cross(x - (hd.pivot + tr));
+            }
+            self.handles.push(hd);
+        }
+        Ok(())
     }
 
     fn add_cloth(&mut self, c: ClothDesc) -> Result<()> {
@@ -339,6 +388,7 @@ impl Model {
                 *v = Vec3::ZERO;
             }
         }
+        self.add_handles(&c.handles, &pinned, offset, &at)?;
         self.mass.extend(masses);
         self.pinned.extend(pinned);
         self.drag.extend(std::iter::repeat_n(mat.air_drag, n));
@@ -455,6 +505,11 @@ impl Model {
         &self.mass
     }
 
+    /// The handles (moving pins) of every cloth.
+    pub fn handles(&self) -> &[crate::constraints::handles::Handle] {
+        &self.handles
+    }
+
     /// Which particles are pinned.
     pub fn pins(&self) -> &[bool] {
         &self.pinned
@@ -530,6 +585,7 @@ mod tests {
             },
             pins: vec![0, 3],
             initial_velocity: Vec3::X,
+            handles: Vec::new(),
         }
     }
 

@@ -102,6 +102,7 @@ impl Preset {
             material,
             pins,
             initial_velocity: Vec3::ZERO,
+            handles: Vec::new(),
         };
         let mut model = Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0))?;
         if let Some(shape) = obstacle {
@@ -112,6 +113,7 @@ impl Preset {
                 stiffness: 1000.0,
             });
             model.obstacles = vec![Obstacle {
+                name: None,
                 collider: Collider::fixed(shape),
                 friction: 0.3,
             }];

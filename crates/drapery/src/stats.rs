@@ -85,6 +85,7 @@ mod tests {
             },
             pins,
             initial_velocity: Vec3::ZERO,
+            handles: Vec::new(),
         }
     }
 

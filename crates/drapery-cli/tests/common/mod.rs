@@ -1,8 +1,12 @@
-//! Helpers shared by the CLI tests: run the binary, compare run folders, check one-line errors.
-#![allow(dead_code)] // each test crate uses some of them
+//! Helpers shared by the end-to-end tests: the examples folder, running the binary, reading
+//! frames, and running an example with `drapery check --scene` on every frame.
+#![allow(dead_code)]
 
 use assert_cmd::Command;
-use std::collections::BTreeMap;
+use drapery::Vec3;
+use drapery::io::obj::read_obj;
+use drapery::scene::Scene;
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
 pub fn examples() -> PathBuf {
@@ -15,11 +19,11 @@ pub struct Out {
     pub stderr: String,
 }
 
-pub fn drapery<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Out {
+pub fn drapery(args: &[&OsStr]) -> Out {
     let o = Command::new(env!("CARGO_BIN_EXE_drapery"))
         .args(args)
         .output()
-        .unwrap();
+        .expect("the binary runs");
     Out {
         code: o.status.code(),
         stdout: String::from_utf8_lossy(&o.stdout).into_owned(),
@@ -27,53 +31,53 @@ pub fn drapery<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Out {
     }
 }
 
-pub fn run_args(scene: &Path, out: &Path, extra: &[&str]) -> Vec<std::ffi::OsString> {
-    let mut v: Vec<std::ffi::OsString> = vec![
-        "run".into(),
-        scene.into(),
-        "-o".into(),
-        out.into(),
-        "-q".into(),
-    ];
-    v.extend(extra.iter().map(|s| s.into()));
-    v
+pub fn frame(dir: &Path, k: usize) -> Vec<Vec3> {
+    read_obj(&dir.join(format!("frame_{k:05}.obj")))
+        .expect("frame reads")
+        .positions
 }
 
-/// Every file of a folder (name → bytes).
-pub fn contents(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| {
-            let e = e.unwrap();
-            (
-                e.file_name().to_string_lossy().into_owned(),
-                std::fs::read(e.path()).unwrap(),
-            )
-        })
-        .collect()
-}
-
-pub fn assert_same_folders(want: &Path, got: &Path) {
-    let (a, b) = (contents(want), contents(got));
-    assert_eq!(
-        a.keys().collect::<Vec<_>>(),
-        b.keys().collect::<Vec<_>>(),
-        "different file sets"
+/// Runs `examples/NAME.toml` into a temporary folder, checks every frame with
+/// `drapery check --scene` (exit 0, no intersection) and returns the folder, the scene and the
+/// frames' positions.
+pub fn run_and_check(name: &str) -> (tempfile::TempDir, Scene, Vec<Vec<Vec3>>) {
+    let scene_path = examples().join(format!("{name}.toml"));
+    let scene = Scene::load(&scene_path).expect("example loads");
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let out = tmp.path().join("out");
+    let r = drapery(&[
+        "run".as_ref(),
+        scene_path.as_os_str(),
+        "--output".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert_eq!(r.code, Some(0), "{name}: run failed: {}", r.stderr);
+    assert!(
+        !r.stderr.contains("warning"),
+        "{name}: the initial state intersects: {}",
+        r.stderr
     );
-    for (name, bytes) in &a {
-        assert!(
-            bytes == &b[name],
-            "{name} differs from the uninterrupted run"
-        );
-    }
-}
-
-pub fn assert_one_error(r: &Out, wants: &[&str]) {
-    assert_eq!(r.code, Some(1), "stdout {} stderr {}", r.stdout, r.stderr);
-    assert_eq!(r.stderr.lines().count(), 1, "{}", r.stderr);
-    assert!(r.stderr.starts_with("error: "), "{}", r.stderr);
-    assert!(!r.stderr.contains("panicked"), "{}", r.stderr);
-    for w in wants {
-        assert!(r.stderr.contains(w), "{:?} lacks {w:?}", r.stderr);
-    }
+    let c = drapery(&[
+        "check".as_ref(),
+        out.as_os_str(),
+        "--scene".as_ref(),
+        scene_path.as_os_str(),
+    ]);
+    assert_eq!(
+        c.code,
+        Some(0),
+        "{name}: drapery check found intersections:\n{}{}",
+        c.stdout,
+        c.stderr
+    );
+    let frames = scene.frame_count() + 1;
+    assert!(
+        c.stdout
+            .contains(&format!("{frames} frames (obj) in {}", out.display()))
+            && c.stdout.contains("no intersection"),
+        "{}",
+        c.stdout
+    );
+    let x = (0..frames).map(|k| frame(&out, k)).collect();
+    (tmp, scene, x)
 }

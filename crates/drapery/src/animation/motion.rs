@@ -7,7 +7,10 @@
 //!
 //! * `Fixed`: `T = 0`, `R = I`.
 //! * `Constant`: `T = v t`, `R = exp(ω t)` (rotation by `|ω| t` about `ω/|ω|`).
+//! * `Keyframed`: `T` and `R` from a [`Track`] (holding its first pose before the first key
+//!   and its last after the last).
 
+use super::keyframes::Track;
 use crate::error::Result;
 use crate::fingerprint::Fnv;
 use crate::math::Vec3;
@@ -26,6 +29,8 @@ pub enum Motion {
         /// Angular velocity about the center, rad/s (axis × rate).
         angular_velocity: Vec3,
     },
+    /// Poses from keyframes.
+    Keyframed(Track),
 }
 
 impl Motion {
@@ -65,24 +70,34 @@ impl Motion {
                 DQuat::from_scaled_axis(*angular_velocity * t),
                 *velocity * t,
             ),
+            Motion::Keyframed(track) => {
+                let (tr, rot) = track.sample(t);
+                (rot, tr)
+            }
         }
     }
 
     /// `(T'(t), ω(t))`.
-    pub fn velocity(&self, _t: f64) -> (Vec3, Vec3) {
+    pub fn velocity(&self, t: f64) -> (Vec3, Vec3) {
         match self {
             Motion::Fixed => (Vec3::ZERO, Vec3::ZERO),
             Motion::Constant {
                 velocity,
                 angular_velocity,
             } => (*velocity, *angular_velocity),
+            Motion::Keyframed(track) => track.velocity(t),
         }
     }
 
     /// Upper bounds on `|T'|` and `|ω|` over `[t0, t1]`.
-    pub fn speed_bound(&self, t0: f64, _t1: f64) -> (f64, f64) {
-        let (v, w) = self.velocity(t0);
-        (v.length(), w.length())
+    pub fn speed_bound(&self, t0: f64, t1: f64) -> (f64, f64) {
+        match self {
+            Motion::Keyframed(track) => track.speed_bound(t0, t1),
+            _ => {
+                let (v, w) = self.velocity(t0);
+                (v.length(), w.length())
+            }
+        }
     }
 
     /// True when the motion is not `Fixed`.
@@ -90,12 +105,30 @@ impl Motion {
         !matches!(self, Motion::Fixed)
     }
 
-    /// Feeds the motion to a fingerprint (a fixed or constant motion as its two velocities).
+    /// Feeds the motion to a fingerprint (a fixed or constant motion as its two velocities,
+    /// keyframes as their times, poses and interpolation).
     pub fn hash(&self, h: &mut Fnv) {
-        let (v, w) = self.velocity(0.0);
-        for x in [v, w] {
+        let vec = |h: &mut Fnv, x: Vec3| {
             for k in 0..3 {
                 h.u64(x[k].to_bits());
+            }
+        };
+        match self {
+            Motion::Keyframed(track) => {
+                h.bytes(b"keyframes")
+                    .bytes(track.interpolation().name().as_bytes());
+                for k in track.keys() {
+                    h.u64(k.time.to_bits());
+                    vec(h, k.translation);
+                    for q in k.rotation.to_array() {
+                        h.u64(q.to_bits());
+                    }
+                }
+            }
+            _ => {
+                let (v, w) = self.velocity(0.0);
+                vec(h, v);
+                vec(h, w);
             }
         }
     }
@@ -105,6 +138,15 @@ impl Motion {
     pub fn describe(&self) -> String {
         let v3 = |p: Vec3| format!("[{}, {}, {}]", p.x, p.y, p.z);
         let mut s = String::new();
+        if let Motion::Keyframed(track) = self {
+            s.push_str(&format!(
+                ", {} {} keyframes from {} s to {} s",
+                track.keys().len(),
+                track.interpolation().name(),
+                track.first_time(),
+                track.last_time()
+            ));
+        }
         if let Motion::Constant {
             velocity,
             angular_velocity,

@@ -43,6 +43,8 @@ impl CollisionSettings {
 /// An obstacle and its friction coefficient.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Obstacle {
+    /// The collider's name (`name = "table"`), unique in a scene, when it has one.
+    pub name: Option<String>,
     /// Shape and rigid motion.
     pub collider: Collider,
     /// Coulomb coefficient for contacts with this obstacle.

@@ -7,6 +7,7 @@
 //! `z` sets its normal velocity). [`Constraints`] holds both for one solve; [`pins`] and
 //! [`obstacle`] write into it: pins first, then the obstacle contacts the active set holds.
 
+pub mod handles;
 pub mod obstacle;
 pub mod pins;
 

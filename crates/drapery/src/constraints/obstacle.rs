@@ -229,6 +229,7 @@ mod tests {
 
     fn ground() -> Obstacle {
         Obstacle {
+            name: None,
             collider: Collider::fixed(Shape::Plane(Plane {
                 point: Vec3::ZERO,
                 normal: Vec3::Y,

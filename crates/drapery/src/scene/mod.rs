@@ -64,6 +64,7 @@ use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 mod collider;
+mod handle;
 
 /// Relative tolerance for "whole number" checks on steps per frame and frame counts.
 pub const WHOLE_TOLERANCE: f64 = 1e-6;
@@ -162,6 +163,8 @@ struct ClothTable {
     #[serde(default)]
     pin: Vec<u32>,
     initial_velocity: Option<[f64; 3]>,
+    #[serde(default)]
+    handle: Vec<toml::Table>,
 }
 
 #[derive(Deserialize)]
@@ -355,12 +358,20 @@ impl Scene {
                 air_drag: c.air_drag.unwrap_or(d.air_drag),
                 mass,
             };
+            let handles = c
+                .handle
+                .iter()
+                .enumerate()
+                .map(|(k, t)| handle::handle(i, k, t, &mesh.positions, dir))
+                .collect::<Result<Vec<_>>>()
+                .map_err(located)?;
             cloths.push(ClothDesc {
                 name: c.name.clone(),
                 mesh,
                 material,
                 pins: c.pin.clone(),
                 initial_velocity: Vec3::from_array(c.initial_velocity.unwrap_or([0.0; 3])),
+                handles,
             });
         }
         let mut collision = file.collision.as_ref().map(collision_settings);
@@ -372,6 +383,7 @@ impl Scene {
         for (i, c) in file.collider.iter().enumerate() {
             obstacles.push(collider::obstacle(i, c, default_friction, dir).map_err(located)?);
         }
+        collider::unique_names(&obstacles).map_err(located)?;
         if collision.is_none() && !obstacles.is_empty() {
             collision = Some(CollisionSettings::default());
         }

@@ -37,7 +37,7 @@ pub(crate) fn contacts(
     let obstacle = obstacle::find(
         x0,
         v0,
-        &model.pinned,
+        &pose.pinned,
         &model.obstacles,
         pose.t0,
         pose.h,
@@ -47,7 +47,7 @@ pub(crate) fn contacts(
     let repulsions = if c.self_collision {
         let cand = candidates(x0, x0, triangles, edges, c.thickness);
         let mut stencils = proximities(x0, triangles, edges, &cand, c.thickness);
-        stencils.retain(|s| s.particles.iter().any(|&p| !model.pinned[p as usize]));
+        stencils.retain(|s| s.particles.iter().any(|&p| !pose.pinned[p as usize]));
         (!stencils.is_empty()).then(|| {
             Repulsions::new(
                 stencils,

@@ -27,7 +27,7 @@ pub(crate) fn run(
     let r = failsafe(
         x0,
         x,
-        &model.pinned,
+        &pose.pinned,
         triangles,
         edges,
         &model.obstacles,

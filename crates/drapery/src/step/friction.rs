@@ -16,6 +16,7 @@ use crate::model::Model;
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run(
     model: &Model,
+    pinned: &[bool],
     settings: &CollisionSettings,
     repulsions: Option<&Repulsions>,
     contacts: &[ObstacleContact],
@@ -31,7 +32,7 @@ pub(crate) fn run(
             v,
             x,
             &model.mass,
-            &model.pinned,
+            pinned,
             &r.stencils,
             &r.penalty,
             settings.friction,
@@ -73,7 +74,18 @@ mod tests {
         v[4] = Vec3::new(1.0, target, 0.0);
         v[3] = Vec3::new(0.2, -0.1, 0.0);
         let mut x = x0.clone();
-        run(&m, &settings, None, &[ct], &[1.0], &x0, h, &mut x, &mut v);
+        run(
+            &m,
+            &m.pinned,
+            &settings,
+            None,
+            &[ct],
+            &[1.0],
+            &x0,
+            h,
+            &mut x,
+            &mut v,
+        );
         assert!((x[4].y - settings.thickness).abs() < 1e-15, "{}", x[4]);
         assert_eq!(
             v[4],

@@ -135,6 +135,7 @@ mod tests {
             },
             pins: vec![],
             initial_velocity: Vec3::ZERO,
+            handles: Vec::new(),
         };
         Model::new(vec![cloth], Vec3::new(0.0, -10.0, 0.0)).unwrap()
     }

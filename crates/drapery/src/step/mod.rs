@@ -190,7 +190,7 @@ impl Simulation {
                 );
             });
             let problem = Problem {
-                pinned: &self.model.pinned,
+                pinned: &pose.pinned,
                 pins: &pose.pins,
                 v: &v,
                 rhs: &work.linearized.rhs,
@@ -229,6 +229,7 @@ impl Simulation {
             timed(&mut report.stages.friction, || {
                 friction::run(
                     &self.model,
+                    &pose.pinned,
                     c,
                     repulsions,
                     &held,

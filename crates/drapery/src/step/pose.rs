@@ -3,8 +3,12 @@
 //!
 //! Colliders are evaluated at any time by their motion ([`crate::collision::colliders`]), so
 //! the stage only records the interval and the bound on their surface speed that the blow-up
-//! test allows for; pins have their end-of-step velocity targets (at rest for fixed pins).
+//! test allows for; pins have their end-of-step velocity targets (at rest for fixed pins, the
+//! chord to the motion's position at `t + h` for handles that hold,
+//! [`crate::constraints::handles`]), and `pinned` says which particles the solve filters out
+//! during this step.
 
+use crate::constraints::handles::step_targets;
 use crate::constraints::pins::PinTargets;
 use crate::model::Model;
 
@@ -17,6 +21,8 @@ pub(crate) struct Pose {
     pub h: f64,
     /// End-of-step velocities of moving pins.
     pub pins: PinTargets,
+    /// Particles whose velocity is prescribed over this step (fixed pins, held handles).
+    pub pinned: Vec<bool>,
     /// Largest linear speed of an obstacle, m/s.
     pub surface_speed: f64,
 }
@@ -28,10 +34,16 @@ pub(crate) fn at(model: &Model, t0: f64, h: f64) -> Pose {
         .iter()
         .map(|o| o.collider.speed_bound(t0, t0 + h).0)
         .fold(0.0, f64::max);
+    let (pinned, moving) = step_targets(&model.pinned, &model.handles, &model.x, t0, h);
+    let surface_speed = moving
+        .iter()
+        .map(|(_, v)| v.length())
+        .fold(surface_speed, f64::max);
     Pose {
         t0,
         h,
-        pins: PinTargets::default(),
+        pins: PinTargets { moving },
+        pinned,
         surface_speed,
     }
 }
@@ -52,6 +64,7 @@ mod tests {
         let mut m = testing::sheet_on_ground(3, 0.5);
         assert_eq!(at(&m, 0.0, 0.01).surface_speed, 0.0);
         m.obstacles.push(Obstacle {
+            name: None,
             collider: Collider {
                 shape: Shape::Sphere(Sphere {
                     center: Vec3::ZERO,

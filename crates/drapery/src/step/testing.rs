@@ -20,6 +20,7 @@ pub fn sheet(k: usize, y: f64, pins: Vec<u32>) -> Model {
         },
         pins,
         initial_velocity: Vec3::new(0.1, -0.2, 0.05),
+        handles: Vec::new(),
     };
     let mut m = Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0)).unwrap();
     for (i, p) in rest.iter().enumerate() {
@@ -34,6 +35,7 @@ pub fn sheet_on_ground(k: usize, y: f64) -> Model {
     let mut m = sheet(k, y, vec![]);
     m.collision = Some(CollisionSettings::default());
     m.obstacles = vec![Obstacle {
+        name: None,
         collider: Collider::fixed(Shape::Plane(Plane {
             point: Vec3::ZERO,
             normal: Vec3::Y,

@@ -54,6 +54,7 @@ fn sheet_on_sheet(normal: Vec3, offset: Vec3, velocity: Vec3, mu: f64) -> Simula
             material: material(),
             pins,
             initial_velocity: Vec3::ZERO,
+            handles: Vec::new(),
         },
         ClothDesc {
             name: "top".into(),
@@ -61,6 +62,7 @@ fn sheet_on_sheet(normal: Vec3, offset: Vec3, velocity: Vec3, mu: f64) -> Simula
             material: material(),
             pins: vec![],
             initial_velocity: velocity,
+            handles: Vec::new(),
         },
     ];
     let model = Model::new(cloths, Vec3::new(0.0, -9.81, 0.0))

@@ -24,6 +24,7 @@ fn sheet(name: &str, n: usize, size: f64, center: Vec3, normal: Vec3, velocity: 
         },
         pins: vec![],
         initial_velocity: velocity,
+        handles: Vec::new(),
     }
 }
 
@@ -50,6 +51,7 @@ fn sim(
 /// The plane y = 0 with Coulomb coefficient `friction`.
 fn ground(friction: f64) -> Obstacle {
     Obstacle {
+        name: None,
         collider: Collider::fixed(Shape::Plane(Plane {
             point: Vec3::ZERO,
             normal: Vec3::Y,
@@ -89,6 +91,7 @@ fn run_clean(s: &mut Simulation, steps: usize, h: f64) {
 #[test]
 fn a_sheet_drapes_over_a_sphere_without_penetrating_it() {
     let sphere = Obstacle {
+        name: None,
         collider: Collider::fixed(Shape::Sphere(Sphere {
             center: Vec3::ZERO,
             radius: 0.3,
@@ -138,6 +141,7 @@ fn a_fast_sheet_does_not_tunnel_through_a_zero_thickness_plate() {
         vec![[0, 2, 1], [0, 3, 2]],
     );
     let plate = Obstacle {
+        name: None,
         collider: Collider::fixed(Shape::Mesh(plate)),
         friction: 0.2,
     };
@@ -200,6 +204,7 @@ fn friction_holds_a_sheet_on_a_tilted_plane_and_without_it_the_sheet_slides() {
     let mut travel = Vec::new();
     for mu in [0.8, 0.0] {
         let plane = Obstacle {
+            name: None,
             collider: Collider::fixed(Shape::Plane(Plane {
                 point: Vec3::ZERO,
                 normal,
@@ -238,6 +243,7 @@ fn a_spinning_sphere_drags_the_sheet_around_by_friction() {
     // points move toward decreasing atan2(z, x)): the part of the sheet resting on top turns with
     // the surface. (A sphere's pose does not depend on its rotation, so the spin can start mid-run.)
     let sphere = Obstacle {
+        name: None,
         collider: Collider::fixed(Shape::Sphere(Sphere {
             center: Vec3::ZERO,
             radius: 1.0,
@@ -326,6 +332,7 @@ fn a_particle_moving_away_from_an_obstacle_is_not_held_by_it() {
 #[test]
 fn a_sheet_starting_deep_inside_a_sphere_is_pushed_out_without_blowing_up() {
     let sphere = Obstacle {
+        name: None,
         collider: Collider::fixed(Shape::Sphere(Sphere {
             center: Vec3::new(0.0, 0.4, 0.0),
             radius: 0.3,
@@ -373,6 +380,7 @@ fn a_mesh_spinning_about_the_origin_of_its_file_carries_the_sheet_around_it() {
         angular_velocity: Vec3::Y,
     };
     let obstacle = Obstacle {
+        name: None,
         collider: Collider {
             shape: Shape::Mesh(plate),
             motion: spin,

@@ -64,6 +64,7 @@ pub fn hanging_cloth(n: usize, settings: SolverSettings, material: Material) -> 
         material,
         pins: vec![0, (n - 1) as u32],
         initial_velocity: Vec3::ZERO,
+        handles: Vec::new(),
     };
     Simulation::new(
         Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0)).unwrap(),

@@ -33,6 +33,7 @@ fn a_hanging_chain_settles_to_weight_below_over_k_per_spring() {
             material,
             pins: vec![0],
             initial_velocity: Vec3::ZERO,
+            handles: Vec::new(),
         }],
         Vec3::new(0.0, -g, 0.0),
     )

@@ -38,6 +38,7 @@ fn linear_spring(
             material,
             pins: vec![0],
             initial_velocity: Vec3::ZERO,
+            handles: Vec::new(),
         }],
         g,
     )

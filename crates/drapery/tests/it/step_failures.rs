@@ -29,6 +29,7 @@ fn rod(k: f64, c: f64, mass: f64, pinned: bool, velocity: Vec3, gravity: Vec3) -
         },
         pins: if pinned { vec![0] } else { vec![] },
         initial_velocity: velocity,
+        handles: Vec::new(),
     };
     Model::new(vec![cloth], gravity).unwrap()
 }

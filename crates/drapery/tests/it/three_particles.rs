@@ -151,6 +151,7 @@ fn one_step_of_the_three_particle_cloth_equals_the_hand_assembled_dense_solve() 
             material,
             pins: vec![],
             initial_velocity: Vec3::ZERO,
+            handles: Vec::new(),
         }],
         g,
     )

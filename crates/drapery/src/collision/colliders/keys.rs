@@ -2,6 +2,7 @@
 //! errors are [`Error::Field`]s naming the key (`collider[0].radius`), which the scene loader
 //! words with the file and the line.
 
+use crate::animation::{Interpolation, Keyframe, Motion, Track};
 use crate::error::{Error, Result};
 use crate::math::Vec3;
 use glam::DQuat;
@@ -105,6 +106,84 @@ impl<'a> Keys<'a> {
         self.get(key)?
             .as_str()
             .ok_or_else(|| self.error(key, "must be a string"))
+    }
+
+    /// An optional keyframe track: `keyframes = [{ time, translation, rotation }, ...]` and
+    /// `interpolation = "linear" | "smooth"` (errors name `FIELD.keyframes[i].KEY`).
+    pub fn track(&self) -> Result<Option<Track>> {
+        let Some(v) = self.table.get("keyframes") else {
+            if self.has("interpolation") {
+                return Err(self.error("interpolation", "given without `keyframes`"));
+            }
+            return Ok(None);
+        };
+        let list = v.as_array().ok_or_else(|| {
+            self.error(
+                "keyframes",
+                "must be an array of tables { time, translation, rotation }",
+            )
+        })?;
+        let mut keys = Vec::with_capacity(list.len());
+        for (i, item) in list.iter().enumerate() {
+            let field = format!("{}.keyframes[{i}]", self.field);
+            let table = item.as_table().ok_or_else(|| {
+                Error::field(&field, "must be a table { time, translation, rotation }")
+            })?;
+            let k = Keys::new(table, field, self.dir);
+            if let Some(key) = table
+                .keys()
+                .find(|key| !["time", "translation", "rotation"].contains(&key.as_str()))
+            {
+                return Err(k.error(
+                    key,
+                    "unknown key of a keyframe (time, translation, rotation)",
+                ));
+            }
+            let rotation = match table.get("rotation") {
+                Some(r) => {
+                    let q = k.numbers::<4>("rotation", r)?;
+                    DQuat::from_xyzw(q[0], q[1], q[2], q[3])
+                }
+                None => DQuat::IDENTITY,
+            };
+            keys.push(Keyframe {
+                time: k.number("time")?,
+                translation: match table.get("translation") {
+                    Some(t) => Vec3::from_array(k.numbers::<3>("translation", t)?),
+                    None => Vec3::ZERO,
+                },
+                rotation,
+            });
+        }
+        let interpolation = match self.table.get("interpolation") {
+            None => Interpolation::default(),
+            Some(v) => Interpolation::parse(
+                v.as_str()
+                    .ok_or_else(|| self.error("interpolation", "must be a string"))?,
+                &self.path("interpolation"),
+            )?,
+        };
+        Track::new(keys, interpolation, &self.field).map(Some)
+    }
+
+    /// The motion: `keyframes` (and `interpolation`), or constant `velocity` and
+    /// `angular_velocity` (each optional), not both.
+    pub fn motion(&self) -> Result<Motion> {
+        if let Some(track) = self.track()? {
+            for key in ["velocity", "angular_velocity"] {
+                if self.has(key) {
+                    return Err(self.error(
+                        key,
+                        "give either keyframes or velocity / angular_velocity, not both",
+                    ));
+                }
+            }
+            return Ok(Motion::Keyframed(track));
+        }
+        Ok(Motion::constant(
+            self.opt_vec3("velocity")?.unwrap_or(Vec3::ZERO),
+            self.opt_vec3("angular_velocity")?.unwrap_or(Vec3::ZERO),
+        ))
     }
 
     /// A required file name, as a path relative to the scene's folder.

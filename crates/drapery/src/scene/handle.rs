@@ -1,0 +1,100 @@
+//! `[[cloth.handle]]` tables: vertices (by index or by a box around their rest positions), an
+//! optional pivot, a motion (keyframes, or constant velocities) and an optional release time.
+//! Errors name `cloth[i].handle[k].key`; the model checks the rest (ranges, overlaps, release).
+
+use crate::collision::colliders::Keys;
+use crate::constraints::handles::HandleDesc;
+use crate::error::Result;
+use crate::math::Vec3;
+use std::path::Path;
+
+const KEYS: &[&str] = &[
+    "vertices",
+    "region",
+    "pivot",
+    "keyframes",
+    "interpolation",
+    "velocity",
+    "angular_velocity",
+    "release",
+];
+
+/// One `[[cloth.handle]]` of cloth `cloth` (index `i`, rest positions `positions`).
+pub(super) fn handle(
+    i: usize,
+    k: usize,
+    table: &toml::Table,
+    positions: &[Vec3],
+    dir: &Path,
+) -> Result<HandleDesc> {
+    let keys = Keys::new(table, format!("cloth[{i}].handle[{k}]"), dir);
+    if let Some(key) = table.keys().find(|key| !KEYS.contains(&key.as_str())) {
+        return Err(keys.error(
+            key,
+            format!(
+                "unknown key of [[cloth.handle]] (expected one of {})",
+                KEYS.join(", ")
+            ),
+        ));
+    }
+    let vertices = match (table.get("vertices"), table.get("region")) {
+        (Some(_), Some(_)) => {
+            return Err(keys.error("region", "give either vertices or region, not both"));
+        }
+        (None, None) => {
+            return Err(keys.error(
+                "vertices",
+                "missing: give `vertices = [...]` or `region = { min = [x, y, z], max = [x, y, z] }`",
+            ));
+        }
+        (Some(v), None) => {
+            let bad = || keys.error("vertices", "must be an array of vertex indices ≥ 0");
+            v.as_array()
+                .ok_or_else(bad)?
+                .iter()
+                .map(|x| {
+                    x.as_integer()
+                        .and_then(|i| u32::try_from(i).ok())
+                        .ok_or_else(bad)
+                })
+                .collect::<Result<Vec<u32>>>()?
+        }
+        (None, Some(r)) => {
+            let region = r.as_table().ok_or_else(|| {
+                keys.error(
+                    "region",
+                    "must be a table { min = [x, y, z], max = [x, y, z] }",
+                )
+            })?;
+            let rk = Keys::new(region, keys.path("region"), dir);
+            let (lo, hi) = (rk.vec3("min")?, rk.vec3("max")?);
+            let inside: Vec<u32> = positions
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| p.cmpge(lo).all() && p.cmple(hi).all())
+                .map(|(i, _)| i as u32)
+                .collect();
+            if inside.is_empty() {
+                return Err(keys.error(
+                    "region",
+                    format!(
+                        "selects no vertex: no rest vertex of the cloth lies in min {:?} max {:?}",
+                        lo.to_array(),
+                        hi.to_array()
+                    ),
+                ));
+            }
+            inside
+        }
+    };
+    let release = keys
+        .has("release")
+        .then(|| keys.number("release"))
+        .transpose()?;
+    Ok(HandleDesc {
+        vertices,
+        pivot: keys.opt_vec3("pivot")?,
+        motion: keys.motion()?,
+        release,
+    })
+}
