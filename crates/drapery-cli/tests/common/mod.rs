@@ -1,12 +1,11 @@
-//! Helpers shared by the end-to-end tests: the examples folder, running the binary, reading
-//! frames, and running an example with `drapery check --scene` on every frame.
-#![allow(dead_code)]
+//! Helpers shared by the CLI tests: run the binary, compare run folders, check one-line errors.
+#![allow(dead_code)] // each test crate uses some of them
 
 use assert_cmd::Command;
 use drapery::Vec3;
 use drapery::io::obj::read_obj;
 use drapery::scene::Scene;
-use std::ffi::OsStr;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 pub fn examples() -> PathBuf {
@@ -19,15 +18,66 @@ pub struct Out {
     pub stderr: String,
 }
 
-pub fn drapery(args: &[&OsStr]) -> Out {
+pub fn drapery<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Out {
     let o = Command::new(env!("CARGO_BIN_EXE_drapery"))
         .args(args)
         .output()
-        .expect("the binary runs");
+        .unwrap();
     Out {
         code: o.status.code(),
         stdout: String::from_utf8_lossy(&o.stdout).into_owned(),
         stderr: String::from_utf8_lossy(&o.stderr).into_owned(),
+    }
+}
+
+pub fn run_args(scene: &Path, out: &Path, extra: &[&str]) -> Vec<std::ffi::OsString> {
+    let mut v: Vec<std::ffi::OsString> = vec![
+        "run".into(),
+        scene.into(),
+        "-o".into(),
+        out.into(),
+        "-q".into(),
+    ];
+    v.extend(extra.iter().map(|s| s.into()));
+    v
+}
+
+/// Every file of a folder (name → bytes).
+pub fn contents(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect()
+}
+
+pub fn assert_same_folders(want: &Path, got: &Path) {
+    let (a, b) = (contents(want), contents(got));
+    assert_eq!(
+        a.keys().collect::<Vec<_>>(),
+        b.keys().collect::<Vec<_>>(),
+        "different file sets"
+    );
+    for (name, bytes) in &a {
+        assert!(
+            bytes == &b[name],
+            "{name} differs from the uninterrupted run"
+        );
+    }
+}
+
+pub fn assert_one_error(r: &Out, wants: &[&str]) {
+    assert_eq!(r.code, Some(1), "stdout {} stderr {}", r.stdout, r.stderr);
+    assert_eq!(r.stderr.lines().count(), 1, "{}", r.stderr);
+    assert!(r.stderr.starts_with("error: "), "{}", r.stderr);
+    assert!(!r.stderr.contains("panicked"), "{}", r.stderr);
+    for w in wants {
+        assert!(r.stderr.contains(w), "{:?} lacks {w:?}", r.stderr);
     }
 }
 

@@ -99,6 +99,7 @@ mod tests {
         assert!(r.stencils.iter().all(|s| s.dist < 0.005));
         // pin every particle: no stencil and no obstacle contact is left
         m.pinned = vec![true; m.particle_count()];
+        let pose = pose::at(&m, 0.0, h);
         let c = contacts(&m, &tris, &edges, &start(&m), &pose);
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
         // collisions off: nothing

@@ -63,6 +63,7 @@ mod tests {
             t0: 0.0,
             h,
             pins: PinTargets::default(),
+            pinned: m.pinned.clone(),
             surface_speed: 0.0,
         };
         let x0 = m.x.clone();
