@@ -1,6 +1,5 @@
 //! Integration tests of the drapery library, gathered in one binary (one link step).
 
-mod breathing;
 mod cloth_friction;
 mod collisions;
 mod common;
@@ -8,6 +7,7 @@ mod determinism;
 mod equilibrium;
 mod implicit_step;
 mod pcg_breakdowns;
+mod sequences;
 mod solvers;
 mod step_failures;
 mod three_particles;
