@@ -95,12 +95,19 @@ fn assert_clean_loop(frames: &[Mesh], tris: &[[u32; 3]]) {
     }
 }
 
-#[test]
-fn breathing_sequence_is_a_closed_mesh_breathing_smoothly() {
-    let (frames, tris) = frames("breathing");
-    assert!((1000..=3000).contains(&tris.len()), "{}", tris.len());
+/// The frames of `examples/<stem>/` and their triangles, checked: a triangle count in `count`,
+/// closed, free of self-intersections, looping.
+fn closed_loop(stem: &str, count: std::ops::RangeInclusive<usize>) -> (Vec<Mesh>, Vec<[u32; 3]>) {
+    let (frames, tris) = frames(stem);
+    assert!(count.contains(&tris.len()), "{}", tris.len());
     assert_closed(&tris, frames[0].vertex_count());
     assert_clean_loop(&frames, &tris);
+    (frames, tris)
+}
+
+#[test]
+fn breathing_sequence_is_a_closed_mesh_breathing_smoothly() {
+    let (frames, tris) = closed_loop("breathing", 1000..=3000);
 
     // The sway is rigid and the breathing scales lengths by s, so V(t) = V₀ s(t)³ (the
     // polyhedron scales exactly). |ds/dt| ≤ 0.1 × 2π / 2 s, so s changes by at most
@@ -141,10 +148,7 @@ fn breathing_sequence_is_a_closed_mesh_breathing_smoothly() {
 
 #[test]
 fn mannequin_sequence_is_a_closed_mesh_raising_its_arms() {
-    let (frames, tris) = frames("mannequin");
-    assert!((4000..=6500).contains(&tris.len()), "{}", tris.len());
-    assert_closed(&tris, frames[0].vertex_count());
-    assert_clean_loop(&frames, &tris);
+    let (frames, tris) = closed_loop("mannequin", 4000..=6500);
     for (k, m) in frames.iter().enumerate() {
         assert!(volume(&m.positions, &tris) > 0.0, "frame {}", k + 1);
         // standing on the ground, within 0.9 m of the vertical axis it turns about
