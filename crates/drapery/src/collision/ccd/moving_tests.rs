@@ -618,7 +618,7 @@ fn failsafe_keeps_particles_on_their_side_of_a_moving_mesh() {
     let report = failsafe(
         &x0,
         &mut x,
-        &vec![false; n],
+        &[false; 5][..n],
         &[],
         &[],
         &obstacles,
