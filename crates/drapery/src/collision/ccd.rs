@@ -25,8 +25,8 @@
 //!   one of the other, so stepping by `(d - δ)/L` never passes the first crossing. The answer is
 //!   never later than the true first time `distance ≤ δ`; the distance at the reported time is
 //!   at most `δ (1 + 1e-3)` plus rounding. If the iteration cap (grazing at a distance barely
-//!   above `δ`) is hit, the current time is returned: conservative, a possible false positive,
-//!   never a miss.
+//!   above `δ`) is hit, the iterate with the smallest distance is returned, a distance less
+//!   than `δ + L / 4096`: conservative, a possible false positive, never a miss.
 //!
 //! Conventions: `None` means no contact during the step. A contact already present at `t = 0`
 //! gives `Some(0.0)`. Non-finite input gives `Some(0.0)` (conservative). Tolerances are
@@ -143,6 +143,8 @@ fn advance(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], gap: f64, slack: f64) -> 
     if l <= 0.0 {
         return None;
     }
+    // the iterate closest to `gap`, returned at the cap
+    let mut closest = (d, t);
     for _ in 0..MAX_ADVANCE_ITERS {
         // The distance cannot reach `gap` before `t + (d - gap) / L`.
         let next = t + (d - gap) / l;
@@ -154,8 +156,13 @@ fn advance(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], gap: f64, slack: f64) -> 
         if d <= accept {
             return Some(t);
         }
+        if d < closest.0 {
+            closest = (d, t);
+        }
     }
-    Some(t)
+    // Every iterate so far came before the first contact, and the steps `(d - gap) / L` add up
+    // to less than 1, so the closest iterate is within `L / MAX_ADVANCE_ITERS` of `gap`.
+    Some(closest.1)
 }
 
 /// Scalar triple product `u · (v × w)`.
@@ -364,8 +371,36 @@ fn toi(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> Option<f64> {
         .as_slice()
         .iter()
         .copied()
-        .find(|&t| distance_at(kind, x0, x1, t) <= tol)
+        .find(|&t| distance_at(kind, x0, x1, t) <= tol || crossing_edges(kind, x0, x1, t, tol))
 }
+
+/// True when the edges cross (closest points of their lines within `tol`, both inside their
+/// segments) at time `t`, the closest points computed from cross products. Only consulted when
+/// [`segment_segment`] says they are farther than `tol`: for nearly parallel edges (angle below
+/// ~1e-7) it skips the interior candidate, whose `a e - b²` is lost to cancellation, and can
+/// overestimate the distance of edges that cross by ~1e-7 × their length; the cross products
+/// keep their accuracy down to small angles.
+fn crossing_edges(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], t: f64, tol: f64) -> bool {
+    if kind != Kind::EdgeEdge {
+        return false;
+    }
+    let x = at(x0, x1, t);
+    let (d1, d2) = (x[1] - x[0], x[3] - x[2]);
+    let n = d1.cross(d2);
+    let nn = n.length_squared();
+    if !(nn > 0.0) {
+        return false;
+    }
+    let r = x[2] - x[0];
+    let s = r.cross(d2).dot(n) / nn;
+    let u = r.cross(d1).dot(n) / nn;
+    (0.0..=1.0).contains(&s)
+        && (0.0..=1.0).contains(&u)
+        && ((x[0] + d1 * s) - (x[2] + d2 * u)).length() <= tol
+}
+
+#[cfg(test)]
+mod moving_tests;
 
 #[cfg(test)]
 mod tests {

@@ -7,6 +7,7 @@ mod determinism;
 mod equilibrium;
 mod implicit_step;
 mod pcg_breakdowns;
+mod sequences;
 mod solvers;
 mod step_failures;
 mod three_particles;
