@@ -37,7 +37,7 @@
 //! two grazing crossings were missed ([`found_cases`]); the constructed cases below use it.
 
 use super::{edge_edge_toi, vertex_triangle_toi};
-use crate::collision::colliders::{Collider, RigidMotion, Shape, TriangleMesh};
+use crate::collision::colliders::{Collider, Motion, Shape, TriangleMesh};
 use crate::collision::failsafe::failsafe;
 use crate::collision::predicates::orient3d;
 use crate::collision::settings::Obstacle;
@@ -571,7 +571,7 @@ fn failsafe_keeps_particles_on_their_side_of_a_moving_mesh() {
     let (t0, h) = (0.0, 0.01);
     let col = Collider {
         shape: Shape::Mesh(cube(0.1)),
-        motion: RigidMotion {
+        motion: Motion::Constant {
             velocity: Vec3::new(30.0, 0.0, 0.0),
             angular_velocity: Vec3::new(0.0, 10.0, 20.0),
         },
@@ -611,6 +611,7 @@ fn failsafe_keeps_particles_on_their_side_of_a_moving_mesh() {
         assert_eq!(entered(&x1, i).is_some(), i < 4, "particle {i}");
     }
     let obstacles = [Obstacle {
+        name: None,
         collider: col.clone(),
         friction: 0.0,
     }];

@@ -125,7 +125,7 @@ pub(crate) fn read_triangles(path: &Path, field: &str) -> Result<(Vec<Vec3>, Vec
 
 impl Kind for TriangleMesh {
     const NAME: &'static str = "mesh";
-    const KEYS: &'static [&'static str] = &["mesh", "center"];
+    const KEYS: &'static [&'static str] = super::MeshSequence::KEYS;
 
     fn parse(k: &Keys) -> Result<TriangleMesh> {
         // the pivot is checked before the file is read

@@ -27,6 +27,7 @@ mod cuboid;
 pub mod keys;
 mod mesh;
 mod plane;
+mod sequence;
 mod sphere;
 
 pub use crate::animation::Motion;
@@ -35,6 +36,7 @@ pub use cuboid::Cuboid;
 pub use keys::Keys;
 pub use mesh::TriangleMesh;
 pub use plane::Plane;
+pub use sequence::MeshSequence;
 pub use sphere::Sphere;
 
 use crate::collision::tessellate::TessellateOptions;
@@ -66,6 +68,10 @@ pub trait Kind: Sized {
     /// stays).
     fn carry(&self, p: Vec3, _t_from: f64, _t_to: f64) -> Vec3 {
         p
+    }
+    /// True for kinds that change shape over time (their triangles move in their own frame).
+    fn deforms(&self) -> bool {
+        false
     }
     /// Upper bound on the speed of the surface in the kind's frame over `[t0, t1]`.
     fn speed_bound(&self, _t0: f64, _t1: f64) -> f64 {
@@ -137,6 +143,8 @@ pub enum Shape {
     Box(Cuboid),
     /// `shape = "mesh"`.
     Mesh(TriangleMesh),
+    /// `shape = "mesh"` with `sequence`: an animated mesh.
+    Sequence(MeshSequence),
 }
 
 /// Calls `$e` with `$s` bound to the kind inside `$shape` (the one match over every kind).
@@ -148,17 +156,19 @@ macro_rules! dispatch {
             Shape::Capsule($s) => $e,
             Shape::Box($s) => $e,
             Shape::Mesh($s) => $e,
+            Shape::Sequence($s) => $e,
         }
     };
 }
 
-/// Every kind's name and keys, in the order of [`Shape`].
+/// Every kind's name and keys, in the order of [`Shape`] (a mesh sequence is a mesh with
+/// `sequence`, so the mesh's keys are the sequence's).
 const KINDS: [(&str, &[&str]); 5] = [
     (Plane::NAME, Plane::KEYS),
     (Sphere::NAME, Sphere::KEYS),
     (Capsule::NAME, Capsule::KEYS),
     (Cuboid::NAME, Cuboid::KEYS),
-    (TriangleMesh::NAME, TriangleMesh::KEYS),
+    (MeshSequence::NAME, MeshSequence::KEYS),
 ];
 
 /// Parses the kind named `name` from its keys.
@@ -168,7 +178,11 @@ fn parse_kind(name: &str, k: &Keys) -> Option<Result<Shape>> {
         Sphere::NAME => Sphere::parse(k).map(Shape::Sphere),
         Capsule::NAME => Capsule::parse(k).map(Shape::Capsule),
         Cuboid::NAME => Cuboid::parse(k).map(Shape::Box),
-        TriangleMesh::NAME => TriangleMesh::parse(k).map(Shape::Mesh),
+        TriangleMesh::NAME => match (k.has("mesh"), k.has("sequence")) {
+            (_, false) => TriangleMesh::parse(k).map(Shape::Mesh),
+            (false, true) => MeshSequence::parse(k).map(Shape::Sequence),
+            (true, true) => Err(k.error("sequence", "give either mesh or sequence, not both")),
+        },
         _ => return None,
     })
 }
@@ -273,6 +287,11 @@ impl Shape {
     /// See [`Kind::carry`].
     pub fn carry(&self, p: Vec3, t_from: f64, t_to: f64) -> Vec3 {
         dispatch!(self, s => s.carry(p, t_from, t_to))
+    }
+
+    /// See [`Kind::deforms`].
+    pub fn deforms(&self) -> bool {
+        dispatch!(self, s => s.deforms())
     }
 
     /// See [`Kind::speed_bound`].
