@@ -1009,8 +1009,9 @@ pub(crate) mod tests {
         }
     }
 
-    /// Writes `sample.glb` and `sample.usda` (a small animated grid, a line-element rope and, in
-    /// the glb, a static ground) into `$DRAPERY_SAMPLE_DIR` when it is set, for
+    /// Writes `sample.glb` and `sample.usda` (a small animated grid, a line-element rope, a
+    /// static ground and the colliders of [`moving_colliders`]: one moving rigidly, one fixed,
+    /// one deforming) into `$DRAPERY_SAMPLE_DIR` when it is set, for
     /// `scripts/validate-outputs.sh`, into a temporary folder otherwise; and checks that both
     /// files read back to what was written: names, topology, key times and every position of
     /// every frame (to f32 precision: glTF stores f32, and frames k ≥ 1 as f32 differences from
@@ -1030,22 +1031,33 @@ pub(crate) mod tests {
             Vec3::new(-2.0, -1.0, 2.0),
         ];
         let ground_triangles = [[0, 2, 1], [0, 3, 2]];
-        let extra = [StaticMesh {
-            name: "ground",
-            positions: &ground,
-            triangles: &ground_triangles,
-        }];
-        write_glb_with(&dir.join("sample.glb"), &cloths, &frames, 24.0, &extra).unwrap();
-        crate::io::usd::write_usda(&dir.join("sample.usda"), &cloths, &frames, 24.0).unwrap();
+        let (_, _, mut extra) = moving_colliders(frames.len(), 24.0);
+        extra.insert(
+            0,
+            MovingMesh {
+                name: "ground".into(),
+                positions: ground.to_vec(),
+                triangles: ground_triangles.to_vec(),
+                motion: MeshMotion::Fixed,
+            },
+        );
+        write_glb_scene(&dir.join("sample.glb"), &cloths, &frames, 24.0, &extra).unwrap();
+        crate::io::usd::write_usda_with(&dir.join("sample.usda"), &cloths, &frames, 24.0, &extra)
+            .unwrap();
 
         let g = read_glb(&dir.join("sample.glb")).unwrap();
         let times: Vec<f32> = (0..frames.len())
             .map(|k| (k as f64 / 24.0) as f32)
             .collect();
         assert_eq!(g.times, times);
-        assert!(g.interpolations.iter().all(|i| i == "STEP"));
+        for m in &g.meshes[..2] {
+            assert_eq!(m.interpolations, ["STEP"]);
+        }
         let names: Vec<&str> = g.meshes.iter().map(|m| m.name.as_str()).collect();
-        assert_eq!(names, ["sheet", "rope", "ground"]);
+        assert_eq!(
+            names,
+            ["sheet", "rope", "ground", "spinner", "post", "wobble"]
+        );
         let sheet_triangles: Vec<u32> = cloths[0].mesh.triangles().into_iter().flatten().collect();
         assert_eq!(
             sheet_triangles.len(),
@@ -1074,7 +1086,10 @@ pub(crate) mod tests {
         assert_eq!(u.time_codes_per_second, 24.0);
         assert_eq!((u.start_time_code, u.end_time_code), (0.0, 11.0));
         let names: Vec<&str> = u.meshes.iter().map(|m| m.name.as_str()).collect();
-        assert_eq!(names, ["sheet", "rope"]);
+        assert_eq!(
+            names,
+            ["sheet", "rope", "ground", "spinner", "post", "wobble"]
+        );
         assert_eq!(u.meshes[0].face_vertex_counts, vec![4; 20]);
         let quads: Vec<u32> = (cloths[0].mesh.faces.iter())
             .flat_map(|f| f.indices().to_vec())
