@@ -320,7 +320,7 @@ fn parse_numbers(s: &str) -> std::result::Result<Vec<f64>, String> {
 }
 
 fn triples(v: &[f64], t: f64) -> std::result::Result<Vec<Vec3>, String> {
-    if v.len() % 3 != 0 {
+    if !v.len().is_multiple_of(3) {
         return Err(format!("time {t}: point list is not made of triples"));
     }
     Ok(v.chunks_exact(3)
