@@ -3,11 +3,14 @@
 Usage: python3 usd_check.py FILE.usda
 Checks: the stage opens, has a default prim, y up, metres, start/end time codes and
 timeCodesPerSecond are set, and every Mesh has `points` at every integer time code from
-start to end with the same point count at each, faceVertexIndices in range, and
-faceVertexCounts summing to the number of indices. Prints nothing and exits 0 on success;
+start to end with the same point count at each (time-sampled at every time code, or constant:
+a fixed or rigidly moving collider), faceVertexIndices in range, and faceVertexCounts summing
+to the number of indices; every time-sampled xform op (a moving collider) has a sample at every
+time code, and the prim's transform evaluates to finite values at each. Prints nothing and exits 0 on success;
 prints the problems and exits 1 otherwise.
 """
 
+import math
 import sys
 
 from pxr import Usd, UsdGeom
@@ -34,8 +37,21 @@ def check(path):
         name = mesh.GetPath()
         points_attr = mesh.GetPointsAttr()
         samples = points_attr.GetTimeSamples()
-        if [int(t) for t in samples] != list(range(start, end + 1)):
+        if samples and [int(t) for t in samples] != list(range(start, end + 1)):
             problems.append(f"{name}: points time samples {samples[:5]}... do not cover {start}..{end}")
+        if not samples and points_attr.Get() is None:
+            problems.append(f"{name}: points are neither time-sampled nor set")
+        xformable = UsdGeom.Xformable(mesh.GetPrim())
+        ops = xformable.GetOrderedXformOps()
+        for op in ops:
+            op_samples = op.GetTimeSamples()
+            if op_samples and [int(t) for t in op_samples] != list(range(start, end + 1)):
+                problems.append(f"{name}: {op.GetOpName()} time samples do not cover {start}..{end}")
+        if ops:
+            for t in range(start, end + 1):
+                m = xformable.ComputeLocalToWorldTransform(Usd.TimeCode(t))
+                if not all(math.isfinite(m[i][j]) for i in range(4) for j in range(4)):
+                    problems.append(f"{name}: transform at time code {t} is not finite")
         counts = list(mesh.GetFaceVertexCountsAttr().Get() or [])
         indices = list(mesh.GetFaceVertexIndicesAttr().Get() or [])
         if sum(counts) != len(indices):

@@ -6,10 +6,12 @@
 # - .glb / .gltf: the Khronos glTF validator (npm `gltf-validator`, a library, driven by
 #   scripts/gltf-validate.mjs); any error fails (warnings are allowed).
 # - .usda / .usd: Pixar's USD (PyPI `usd-core`) through scripts/usd_check.py: the stage opens,
-#   time codes are set and `points` is read at every time code.
+#   time codes are set, `points` is read at every time code, and time-sampled xform ops (moving
+#   colliders) cover every time code and evaluate.
 #
 # Without arguments it first writes target/sample-outputs/sample.{glb,usda} (a small animated
-# grid, a line-element rope and a static ground; deterministic fake motion) by running the test
+# grid, a line-element rope, a static ground, and colliders moving rigidly, fixed and deforming;
+# deterministic fake motion) by running the test
 # `io::gltf::tests::sample_outputs` with DRAPERY_SAMPLE_DIR set, then validates those.
 #
 # The tools are installed once into $DRAPERY_TOOLS_DIR (default target/validator-tools): npm

@@ -13,11 +13,11 @@ use clap::ValueEnum;
 use drapery::Vec3;
 use drapery::collision::settings::Obstacle;
 use drapery::io::frames::frame_path;
-use drapery::io::gltf::{StaticMesh, write_glb_with};
+use drapery::io::gltf::write_glb_scene;
 use drapery::io::obj::ObjWriter;
 use drapery::io::pc2::Pc2Writer;
 use drapery::io::ply::write_ply;
-use drapery::io::usd::write_usda;
+use drapery::io::usd::write_usda_with;
 use drapery::model::ClothInfo;
 use std::path::{Path, PathBuf};
 
@@ -177,8 +177,9 @@ pub fn check_cloth_names(formats: &[Format], cloths: &[ClothInfo]) -> drapery::R
     Ok(())
 }
 
-/// `DIR/<stem>.glb` or `DIR/<stem>.usda`, written once at the end from every frame. The glb
-/// also holds the colliders, as static meshes in their pose at frame 0.
+/// `DIR/<stem>.glb` or `DIR/<stem>.usda`, written once at the end from every frame, with the
+/// colliders: fixed ones as they are, moving ones animated at every frame's time (glb: node
+/// translation/rotation channels; usd: time-sampled xform ops).
 struct WholeRun {
     format: Format,
     path: PathBuf,
@@ -191,23 +192,19 @@ impl FrameWriter for WholeRun {
         true
     }
     fn finish(&mut self, cloths: &[ClothInfo], frames: &[Vec<Vec3>]) -> drapery::Result<()> {
+        let bounds = frames
+            .first()
+            .and_then(|x| drapery::render::bounds(x.iter()));
+        let colliders = crate::colliders::collider_tracks(
+            &self.obstacles,
+            frames.len(),
+            self.frame_rate,
+            bounds,
+        );
+        let (path, rate) = (&self.path, self.frame_rate);
         match self.format {
-            Format::Glb => {
-                let bounds = frames
-                    .first()
-                    .and_then(|x| drapery::render::bounds(x.iter()));
-                let meshes = crate::colliders::collider_meshes(&self.obstacles, 0.0, bounds);
-                let extra: Vec<StaticMesh<'_>> = meshes
-                    .iter()
-                    .map(|m| StaticMesh {
-                        name: &m.name,
-                        positions: &m.positions,
-                        triangles: &m.triangles,
-                    })
-                    .collect();
-                write_glb_with(&self.path, cloths, frames, self.frame_rate, &extra)
-            }
-            _ => write_usda(&self.path, cloths, frames, self.frame_rate),
+            Format::Glb => write_glb_scene(path, cloths, frames, rate, &colliders),
+            _ => write_usda_with(path, cloths, frames, rate, &colliders),
         }
     }
 }
