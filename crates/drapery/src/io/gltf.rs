@@ -70,8 +70,8 @@ pub struct MovingMesh {
 
 /// True when the collider's shape changes with time (its vertices move in its own frame), so
 /// that outputs must hold its vertices at every frame rather than a rigid transform.
-fn deforms(_c: &Collider) -> bool {
-    false
+fn deforms(c: &Collider) -> bool {
+    c.shape.deforms()
 }
 
 impl MovingMesh {
