@@ -365,6 +365,28 @@ impl Simulation {
         Ok(())
     }
 
+    /// Replaces the motion of handle `index` (in the order of [`Model::handles`]: the cloths'
+    /// handles in scene order) from now on; it takes effect at the next step, whose end
+    /// positions the new motion gives. An error when there is no such handle or the motion is
+    /// not finite.
+    pub fn set_handle_motion(
+        &mut self,
+        index: usize,
+        motion: crate::animation::Motion,
+    ) -> Result<()> {
+        let n = self.model.handles.len();
+        let field = format!("handle[{index}]");
+        let Some(h) = self.model.handles.get_mut(index) else {
+            return Err(crate::Error::field(
+                field,
+                format!("no such handle: the scene has {n}"),
+            ));
+        };
+        motion.validate(&field)?;
+        h.motion = motion;
+        Ok(())
+    }
+
     /// The forces acting on the model.
     pub fn forces(&self) -> &[Box<dyn Force>] {
         &self.forces
