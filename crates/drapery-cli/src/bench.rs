@@ -2,7 +2,8 @@
 //!
 //! Scenes (one step per frame, dt = 1/60 s, a 1 m square cloth of 0.1 kg, stretch 1000 N/m):
 //! `hang-N` hangs from two corners; `drape-N` falls on a sphere (self-collision on);
-//! `pile-N` falls on the ground, tilted, and folds onto itself (self-collision on).
+//! `pile-N` falls on the ground, tilted, and folds onto itself (self-collision on);
+//! `twist-N` is wrung by two handles turning opposite ways (self-collision on).
 //! Each scene is first advanced by some untimed warm-up frames (so that collision scenes are
 //! in contact; `--warm-up` overrides the count), then `--frames` frames are timed. Each frame is written as OBJ to a temporary
 //! folder through the same writer thread as `drapery run` ([`crate::writer`]): the loop steps,
@@ -29,7 +30,7 @@ use std::time::Instant;
 #[derive(Args)]
 pub struct BenchArgs {
     /// Scenes to run, comma-separated (e.g. hang-64,drape-64); default: all standard scenes
-    /// hang-32,hang-64,hang-128,hang-256,drape-64,drape-128,pile-64,pile-128.
+    /// hang-32,hang-64,hang-128,hang-256,drape-64,drape-128,pile-64,pile-128,twist-64,twist-128.
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
     /// Timed frames per run.
@@ -45,7 +46,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 1e-3)]
     tolerance: f64,
     /// Untimed frames before the timed ones (default: each scene's own, hang 5, drape 30,
-    /// pile 40, so that the collision scenes are in contact). `--warm-up 0` makes a quick
+    /// pile 40, twist 90, so that the collision scenes are in contact). `--warm-up 0` makes a quick
     /// smoke run.
     #[arg(long, value_name = "FRAMES")]
     warm_up: Option<usize>,
@@ -60,6 +61,8 @@ const STANDARD: &[&str] = &[
     "drape-128",
     "pile-64",
     "pile-128",
+    "twist-64",
+    "twist-128",
 ];
 
 /// Checks a scene name `KIND-SIZE`.

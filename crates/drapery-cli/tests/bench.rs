@@ -110,7 +110,7 @@ fn every_standard_scene_runs_one_frame() {
     let rows = table(&r.stdout);
     let names: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
     let standard = documented_scenes();
-    assert_eq!(standard.len(), 8, "{standard:?}");
+    assert_eq!(standard.len(), 10, "{standard:?}");
     assert_eq!(names, standard);
     rows.iter().for_each(check_row);
     // The first step from rest starts the PCG from zero against gravity: it must iterate.
@@ -123,7 +123,7 @@ fn every_preset_runs_one_frame_after_its_warm_up() {
     let r = drapery(&[
         "bench",
         "--scenes",
-        "hang-8,drape-8,pile-8",
+        "hang-8,drape-8,pile-8,twist-8",
         "--frames",
         "1",
         "--runs",
@@ -132,7 +132,7 @@ fn every_preset_runs_one_frame_after_its_warm_up() {
     assert_eq!(r.code, Some(0), "{}", r.stderr);
     let rows = table(&r.stdout);
     let names: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
-    assert_eq!(names, ["hang-8", "drape-8", "pile-8"]);
+    assert_eq!(names, ["hang-8", "drape-8", "pile-8", "twist-8"]);
     rows.iter().for_each(check_row);
 }
 

@@ -5,14 +5,20 @@
 //!
 //! * [`Preset::Hang`]: vertical, hanging from its two top corners;
 //! * [`Preset::Drape`]: horizontal, 0.4 m above a fixed sphere of radius 0.3 m;
-//! * [`Preset::Pile`]: tilted, 0.6 m above the ground plane, so that it folds onto itself.
+//! * [`Preset::Pile`]: tilted, 0.6 m above the ground plane, so that it folds onto itself;
+//! * [`Preset::Twist`]: horizontal, without gravity, its left and right edges handles turning
+//!   in opposite directions about the x axis (a turn each in 4 s) while moving 0.1 m inward
+//!   each: the cloth wrings itself into self-contact.
 //!
-//! Drape and pile have collisions on (thickness 5 mm, self-collision, friction 0.3).
+//! Drape, pile and twist have collisions on (thickness 5 mm, self-collision, friction 0.3).
 
+use crate::animation::{Interpolation, Keyframe, Motion, Track};
 use crate::collision::colliders::{Collider, Plane, Shape, Sphere};
 use crate::collision::settings::{CollisionSettings, Obstacle};
+use crate::constraints::handles::HandleDesc;
 use crate::model::{ClothDesc, MassSpec, Material, Model};
 use crate::{Error, Mesh, Result, Simulation, SolverSettings, Vec3};
+use glam::DQuat;
 
 /// Which standard scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -23,6 +29,8 @@ pub enum Preset {
     Drape,
     /// Falling onto the ground and folding.
     Pile,
+    /// Wrung by two handles turning opposite ways.
+    Twist,
 }
 
 impl Preset {
@@ -41,7 +49,12 @@ impl Preset {
             "hang" => Preset::Hang,
             "drape" => Preset::Drape,
             "pile" => Preset::Pile,
-            _ => return Err(bad(format!("unknown kind '{kind}' (hang, drape or pile)"))),
+            "twist" => Preset::Twist,
+            _ => {
+                return Err(bad(format!(
+                    "unknown kind '{kind}' (hang, drape, pile or twist)"
+                )));
+            }
         };
         Ok((preset, n))
     }
@@ -52,6 +65,7 @@ impl Preset {
             Preset::Hang => 5,
             Preset::Drape => 30,
             Preset::Pile => 40,
+            Preset::Twist => 90,
         }
     }
 
@@ -66,6 +80,7 @@ impl Preset {
             mass: MassSpec::Density(0.1),
         };
         let (center, normal, pins, obstacle) = match self {
+            Preset::Twist => (Vec3::new(0.0, 1.0, 0.0), Vec3::Y, vec![], None),
             Preset::Hang => (
                 Vec3::new(0.0, 1.0, 0.0),
                 Vec3::Z,
@@ -95,16 +110,30 @@ impl Preset {
             Preset::Hang => "hang",
             Preset::Drape => "drape",
             Preset::Pile => "pile",
+            Preset::Twist => "twist",
+        };
+        let mesh = Mesh::grid([1.0, 1.0], [n, n], center, normal)?;
+        let (handles, gravity) = match self {
+            Preset::Twist => (twist_handles(&mesh.positions)?, Vec3::ZERO),
+            _ => (Vec::new(), Vec3::new(0.0, -9.81, 0.0)),
         };
         let cloth = ClothDesc {
             name: name.into(),
-            mesh: Mesh::grid([1.0, 1.0], [n, n], center, normal)?,
+            mesh,
             material,
             pins,
             initial_velocity: Vec3::ZERO,
-            handles: Vec::new(),
+            handles,
         };
-        let mut model = Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0))?;
+        let mut model = Model::new(vec![cloth], gravity)?;
+        if self == Preset::Twist {
+            model.collision = Some(CollisionSettings {
+                thickness: 0.005,
+                self_collision: true,
+                friction: 0.3,
+                stiffness: 1000.0,
+            });
+        }
         if let Some(shape) = obstacle {
             model.collision = Some(CollisionSettings {
                 thickness: 0.005,
@@ -132,6 +161,35 @@ impl Preset {
     }
 }
 
+/// The twist's handles: the vertices at x = -0.5 and x = +0.5, each turning one turn about +x
+/// (the left one counter-clockwise, the right one clockwise) in 4 s, keyed every eighth of a
+/// turn, while moving 0.1 m toward the middle.
+fn twist_handles(x: &[Vec3]) -> Result<Vec<HandleDesc>> {
+    [-1.0f64, 1.0]
+        .into_iter()
+        .map(|side| {
+            let keys = (0..=8)
+                .map(|k| {
+                    let f = k as f64 / 8.0;
+                    Keyframe {
+                        time: 4.0 * f,
+                        translation: Vec3::new(-side * 0.1 * f, 0.0, 0.0),
+                        rotation: DQuat::from_rotation_x(-side * std::f64::consts::TAU * f),
+                    }
+                })
+                .collect();
+            Ok(HandleDesc {
+                vertices: (0..x.len() as u32)
+                    .filter(|&i| (x[i as usize].x - 0.5 * side).abs() < 1e-9)
+                    .collect(),
+                pivot: None,
+                motion: Motion::Keyframed(Track::new(keys, Interpolation::Linear, "twist")?),
+                release: None,
+            })
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -140,6 +198,7 @@ mod tests {
     fn names_parse_and_bad_names_are_refused() {
         assert_eq!(Preset::parse("hang-64").unwrap(), (Preset::Hang, 64));
         assert_eq!(Preset::parse("pile-2").unwrap(), (Preset::Pile, 2));
+        assert_eq!(Preset::parse("twist-128").unwrap(), (Preset::Twist, 128));
         for bad in ["hang", "hang-1", "hang-x", "swing-64", "drape-5000"] {
             assert!(Preset::parse(bad).is_err(), "{bad}");
         }
@@ -155,6 +214,31 @@ mod tests {
             assert!(m.collision.is_some_and(|c| c.self_collision));
             assert_eq!(m.obstacles.len(), 1);
             assert!((m.total_mass() - 0.1).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn twist_edges_are_handles_that_meet_after_a_turn_each() {
+        let n = 9;
+        let m = Preset::Twist.model(n).unwrap();
+        assert!(m.collision.is_some_and(|c| c.self_collision) && m.gravity() == Vec3::ZERO);
+        let h = m.handles();
+        assert_eq!(h.len(), 2);
+        for (hd, side) in h.iter().zip([-1.0, 1.0]) {
+            assert_eq!(hd.particles.len(), n);
+            // at 4 s: a whole turn (back to the start) and 0.1 m inward
+            for k in 0..n {
+                let d = hd.position(k, 4.0) - hd.rest[k];
+                assert!(
+                    (d - Vec3::new(-side * 0.1, 0.0, 0.0)).length() < 1e-12,
+                    "{d}"
+                );
+            }
+            // at 1 s, a quarter turn: the edge stands vertical (its z extent turned into y)
+            let ys: Vec<f64> = (0..n).map(|k| hd.position(k, 1.0).y).collect();
+            let spread = ys.iter().cloned().fold(f64::MIN, f64::max)
+                - ys.iter().cloned().fold(f64::MAX, f64::min);
+            assert!((spread - 1.0).abs() < 1e-9, "{spread}");
         }
     }
 }
