@@ -152,6 +152,10 @@ impl Kind for TriangleMesh {
         (self.vertices.clone(), self.triangles.clone())
     }
 
+    fn solid(&self) -> bool {
+        false
+    }
+
     fn surface(&self, _t: f64) -> Option<(Vec<Vec3>, &[[u32; 3]])> {
         Some((self.vertices.clone(), &self.triangles))
     }

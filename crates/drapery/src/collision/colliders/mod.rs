@@ -60,6 +60,11 @@ pub trait Kind: Sized {
     fn closest(&self, p: Vec3, t: f64) -> Local;
     /// Triangles for pictures and files at time `t`, counter-clockwise seen from outside.
     fn tessellate(&self, t: f64, o: &TessellateOptions) -> (Vec<Vec3>, Vec<[u32; 3]>);
+    /// True for kinds with an inside (a signed distance); false for surfaces, which must
+    /// provide [`Kind::surface`].
+    fn solid(&self) -> bool {
+        true
+    }
     /// For surface kinds: the vertices at time `t` and the triangles, for CCD. `None` for solids.
     fn surface(&self, _t: f64) -> Option<(Vec<Vec3>, &[[u32; 3]])> {
         None
@@ -271,7 +276,7 @@ impl Shape {
 
     /// True for kinds with an inside (swept by conservative advancement, not CCD).
     pub fn is_solid(&self) -> bool {
-        self.surface(0.0).is_none()
+        dispatch!(self, s => s.solid())
     }
 
     /// Surface kinds: vertices at `t` and triangles (see [`Kind::surface`]).

@@ -273,6 +273,10 @@ impl Kind for MeshSequence {
         (self.vertices_at(t), self.triangles.clone())
     }
 
+    fn solid(&self) -> bool {
+        false
+    }
+
     fn surface(&self, t: f64) -> Option<(Vec<Vec3>, &[[u32; 3]])> {
         Some((self.vertices_at(t), &self.triangles))
     }
