@@ -251,3 +251,120 @@ proptest! {
         prop_assert!((vfd - r.velocity_at_point).length() < 1e-6);
     }
 }
+
+/// A bumpy 2 m grid deforming over 4 files at 10 files per second: file `k` moves vertex `i`
+/// by a different amount along each axis.
+fn deforming_grid() -> (Vec<Vec<Vec3>>, Vec<[u32; 3]>) {
+    let g = crate::mesh::Mesh::grid([2.0, 2.0], [7, 6], Vec3::ZERO, Vec3::Z).unwrap();
+    let frames = (0..4)
+        .map(|k| {
+            let f = k as f64;
+            g.positions
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    let a = i as f64 * 0.37 + f;
+                    *p + Vec3::new(0.1 * f, 0.05 * (a.sin()), 0.2 * (a * 1.3).cos() + 0.1 * f)
+                })
+                .collect()
+        })
+        .collect();
+    (frames, g.triangles())
+}
+
+#[test]
+fn a_mesh_sequence_blends_its_files_linearly_and_holds_at_both_ends() {
+    let (frames, tris) = deforming_grid();
+    let s = MeshSequence::new(frames.clone(), tris, 10.0);
+    for (k, f) in frames.iter().enumerate() {
+        assert_eq!(&s.vertices_at(k as f64 / 10.0), f, "file {k}");
+    }
+    assert_eq!(s.vertices_at(-1.0), frames[0]);
+    assert_eq!(s.vertices_at(5.0), frames[3]);
+    let mid = s.vertices_at(0.125);
+    for i in 0..mid.len() {
+        let want = frames[1][i] + 0.25 * (frames[2][i] - frames[1][i]);
+        assert!((mid[i] - want).length() < 1e-15);
+    }
+    assert!(Shape::Sequence(s.clone()).deforms() && !Shape::Sequence(s).is_solid());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// The per-interval BVH boxes hold every blend: the closest point equals brute force at any
+    /// time; the surface velocity is the blend of the vertices' velocities, which is the time
+    /// derivative of the material point; the speed bound holds.
+    #[test]
+    fn mesh_sequence_queries_match_brute_force_at_any_time(
+        p in prop::array::uniform3(-1.5..1.5f64),
+        t in -0.05..0.4f64,
+    ) {
+        let (frames, tris) = deforming_grid();
+        let s = MeshSequence::new(frames, tris.clone(), 10.0);
+        let c = Collider::fixed(Shape::Sequence(s.clone()));
+        let p = Vec3::from_array(p);
+        let v = s.vertices_at(t);
+        let brute = tris
+            .iter()
+            .map(|tr| point_triangle(p, v[tr[0] as usize], v[tr[1] as usize], v[tr[2] as usize]).dist)
+            .fold(f64::INFINITY, f64::min);
+        let r = c.closest(p, t);
+        prop_assert!((r.signed_distance - brute).abs() < 1e-14, "{} vs {brute}", r.signed_distance);
+        // the material point with the closest point's barycentric weights, followed in time
+        let ti = r.triangle.unwrap() as usize;
+        let pt = point_triangle(p, v[tris[ti][0] as usize], v[tris[ti][1] as usize], v[tris[ti][2] as usize]);
+        let at = |t: f64| {
+            let w = s.vertices_at(t);
+            let [a, b, cc] = tris[ti].map(|i| w[i as usize]);
+            a * pt.bary[0] + b * pt.bary[1] + cc * pt.bary[2]
+        };
+        let interior = |t: f64| {
+            let f = t * 10.0;
+            f > 0.0 && f < 3.0 && (f - f.round()).abs() > 1e-4
+        };
+        if interior(t) {
+            let d = 1e-6;
+            let fd = (at(t + d) - at(t - d)) / (2.0 * d);
+            prop_assert!((fd - r.velocity_at_point).length() < 1e-7, "{fd} vs {}", r.velocity_at_point);
+            prop_assert!(r.velocity_at_point.length() <= c.speed_bound(t, t).0 * (1.0 + 1e-12));
+        }
+        // carried along, the point stays at the same barycentric place and offset
+        let moved = c.carry(p, t, t + 0.05);
+        prop_assert!((moved - (at(t + 0.05) + (p - pt.q))).length() < 1e-12);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// A keyframed collider's surface velocity at a contact is the time derivative of that
+    /// material point's path, in both interpolations.
+    #[test]
+    fn keyframed_surface_velocity_is_the_derivative_of_the_material_path(
+        which in 0usize..4,
+        p in prop::array::uniform3(-1.5..1.5f64),
+        t in 0.01..2.9f64,
+        smooth in any::<bool>(),
+    ) {
+        use crate::animation::{Interpolation, Keyframe, Track};
+        let keys = vec![
+            Keyframe::at(0.0),
+            Keyframe { time: 1.0, translation: Vec3::new(0.3, 0.1, 0.0), rotation: DQuat::from_rotation_y(0.8) },
+            Keyframe { time: 2.0, translation: Vec3::new(0.1, 0.5, -0.2), rotation: DQuat::from_rotation_x(-0.5) },
+            Keyframe { time: 3.0, translation: Vec3::ZERO, rotation: DQuat::from_rotation_z(1.0) },
+        ];
+        let interp = if smooth { Interpolation::Smooth } else { Interpolation::Linear };
+        let c = Collider::moving(
+            shapes()[which].clone(),
+            Motion::Keyframed(Track::new(keys, interp, "c").unwrap()),
+        );
+        let r = c.closest(Vec3::from_array(p), t);
+        let x0 = c.to_local(r.point, t);
+        let d = 1e-6;
+        if ((t + 0.5) % 1.0 - 0.5).abs() > 2.0 * d || smooth {
+            let fd = (c.transform_point(x0, t + d) - c.transform_point(x0, t - d)) / (2.0 * d);
+            prop_assert!((fd - r.velocity_at_point).length() < 1e-6, "{fd} vs {}", r.velocity_at_point);
+        }
+    }
+}
