@@ -256,6 +256,12 @@ pub fn run(args: RunArgs) -> Result<()> {
         .map(|&f| writer_for(f, dir, &stem, scene.frame_rate, &scene.obstacles))
         .partition(|w| w.whole_run());
     let keep_history = !whole_run.is_empty();
+    if matches!(begin, Start::Fresh) {
+        // `[simulation] preroll`: settle with everything held at its pose at t = 0; frame 0 is
+        // the settled state (a resumed run restores its snapshot instead)
+        sim.preroll(scene.preroll_steps(), scene.step_size())
+            .with_context(|| format!("{}: pre-roll", args.scene.display()))?;
+    }
     let (first, history) = match begin {
         Start::Fresh => (
             0,

@@ -9,7 +9,8 @@ use common::{drapery, run_and_check};
 use drapery::Vec3;
 use drapery::scene::Scene;
 
-/// Every handle vertex of every frame is where the scene's motion puts it at the frame's time
+/// Every handle vertex of every frame is where the scene's motion (or, attached, its collider)
+/// puts it at the frame's time
 /// (to 1e-12 relative to the vertex's distance from the origin, plus 1e-15 m).
 fn assert_handles_follow(scene: &Scene, frames: &[Vec<Vec3>]) -> usize {
     let model = scene.model().expect("model");
@@ -21,7 +22,7 @@ fn assert_handles_follow(scene: &Scene, frames: &[Vec<Vec3>]) -> usize {
                 continue;
             }
             for (j, &p) in hd.particles.iter().enumerate() {
-                let want = hd.position(j, t);
+                let want = hd.target(j, t, model.obstacles());
                 let got = x[p as usize];
                 assert!(
                     (got - want).length() <= 1e-12 * want.length() + 1e-15,
@@ -124,6 +125,21 @@ fn cloth_on_the_breathing_torso_is_never_inside_it() {
         touching > 50,
         "the cloth rests on the torso: {touching} vertices within 2 cm"
     );
+}
+
+#[test]
+fn cape_stays_attached_to_the_moving_body_after_settling_in_the_preroll() {
+    let (_t, scene, frames) = run_and_check("cape");
+    assert!(scene.preroll > 0.0 && scene.obstacles[0].collider.shape.deforms());
+    let model = scene.model().unwrap();
+    assert_eq!(model.handles()[0].attach, Some(0));
+    // attached vertices ride the body (the mannequin turns and raises its arms)
+    assert!(assert_handles_follow(&scene, &frames) >= 21 * frames.len());
+    let top = &model.handles()[0];
+    let p = top.particles[0] as usize;
+    let moved = (frames[15][p] - frames[0][p]).length();
+    assert!(moved > 0.05, "the body turns 0.5 rad by 0.5 s: {moved}");
+    assert_eq!(frames.len(), 61);
 }
 
 // ------------------------------------------------------------------------------ bad input
@@ -265,6 +281,16 @@ fn bad_handles_are_named() {
         &format!("{h}vertices = [0]\nrelease = -0.5\n{keys}"),
         &[],
         &["cloth[0].handle[0].release: -0.5 s is before the first key"],
+    );
+    assert_rejected(
+        &format!("{h}vertices = [0]\nattach = \"table\"\n"),
+        &[],
+        &["cloth[0].handle[0].attach: no collider is named 'table'"],
+    );
+    assert_rejected(
+        &format!("{h}vertices = [0]\nattach = \"box\"\n{keys}{BOX}name = \"box\"\n"),
+        &[],
+        &["cloth[0].handle[0].keyframes: an attached handle follows its collider"],
     );
     assert_rejected(
         &format!("{h}vertices = [0]\nhandle_speed = 1\n"),

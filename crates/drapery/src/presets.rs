@@ -185,6 +185,7 @@ fn twist_handles(x: &[Vec3]) -> Result<Vec<HandleDesc>> {
                 pivot: None,
                 motion: Motion::Keyframed(Track::new(keys, Interpolation::Linear, "twist")?),
                 release: None,
+                attach: None,
             })
         })
         .collect()

@@ -9,6 +9,8 @@
 //! * `Constant`: `T = v t`, `R = exp(ω t)` (rotation by `|ω| t` about `ω/|ω|`).
 //! * `Keyframed`: `T` and `R` from a [`Track`] (holding its first pose before the first key
 //!   and its last after the last).
+//!
+//! Before `t = 0` (a pre-roll) every motion holds its pose at 0, at rest.
 
 use super::keyframes::Track;
 use crate::error::Result;
@@ -66,10 +68,13 @@ impl Motion {
             Motion::Constant {
                 velocity,
                 angular_velocity,
-            } => (
-                DQuat::from_scaled_axis(*angular_velocity * t),
-                *velocity * t,
-            ),
+            } => {
+                let t = t.max(0.0);
+                (
+                    DQuat::from_scaled_axis(*angular_velocity * t),
+                    *velocity * t,
+                )
+            }
             Motion::Keyframed(track) => {
                 let (tr, rot) = track.sample(t);
                 (rot, tr)
@@ -81,6 +86,7 @@ impl Motion {
     pub fn velocity(&self, t: f64) -> (Vec3, Vec3) {
         match self {
             Motion::Fixed => (Vec3::ZERO, Vec3::ZERO),
+            Motion::Constant { .. } if t < 0.0 => (Vec3::ZERO, Vec3::ZERO),
             Motion::Constant {
                 velocity,
                 angular_velocity,
@@ -94,7 +100,7 @@ impl Motion {
         match self {
             Motion::Keyframed(track) => track.speed_bound(t0, t1),
             _ => {
-                let (v, w) = self.velocity(t0);
+                let (v, w) = self.velocity(t0.max(t1));
                 (v.length(), w.length())
             }
         }
@@ -190,6 +196,10 @@ mod tests {
         assert!((fd - (v + w.cross(at(t) - tr))).length() < 1e-8);
         assert_eq!(Motion::constant(Vec3::ZERO, Vec3::ZERO), Motion::Fixed);
         assert_eq!(m.speed_bound(0.0, 1.0), (1.0, 2.0));
+        // before t = 0 (a pre-roll) it holds its pose at 0, at rest
+        assert_eq!(m.pose(-0.5), m.pose(0.0));
+        assert_eq!(m.velocity(-0.5), (Vec3::ZERO, Vec3::ZERO));
+        assert_eq!(m.speed_bound(-0.5, -0.1), (0.0, 0.0));
         let bad = Motion::Constant {
             velocity: Vec3::new(0.0, f64::NAN, 0.0),
             angular_velocity: Vec3::ZERO,

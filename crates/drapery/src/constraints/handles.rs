@@ -7,8 +7,15 @@
 //! velocity is prescribed as the chord velocity `(target(t + h) - x(t)) / h`, so it ends the step
 //! where the motion puts it (Baraff & Witkin's prescribed velocity, docs/MATH.md §5); from the
 //! release on it is free.
+//!
+//! An attachment (`attach = "COLLIDER"`) is a handle that follows a collider instead of its own
+//! motion: each vertex is bound at `t = 0` to its closest point on the collider (in the
+//! collider's frame; on a mesh by the closest triangle's barycentric weights, so it follows an
+//! animated mesh sequence) and keeps its offset from that point: its target at `t` is
+//! [`crate::collision::colliders::Collider::carry`] of its initial position from 0 to `t`.
 
 use crate::animation::Motion;
+use crate::collision::settings::Obstacle;
 use crate::error::{Error, Result};
 use crate::math::Vec3;
 
@@ -23,6 +30,8 @@ pub struct HandleDesc {
     pub motion: Motion,
     /// From this time on the vertices are free.
     pub release: Option<f64>,
+    /// Index of the obstacle the vertices are attached to (then `motion` is unused).
+    pub attach: Option<usize>,
 }
 
 /// A handle of the model: global particle indices and their initial positions.
@@ -38,6 +47,8 @@ pub struct Handle {
     pub motion: Motion,
     /// Release time.
     pub release: Option<f64>,
+    /// The obstacle the vertices follow, if attached.
+    pub attach: Option<usize>,
 }
 
 impl Handle {
@@ -97,6 +108,7 @@ impl Handle {
             pivot,
             motion: d.motion.clone(),
             release: d.release,
+            attach: d.attach,
         })
     }
 
@@ -105,10 +117,20 @@ impl Handle {
         self.release.is_none_or(|r| t0 < r)
     }
 
-    /// Where the motion puts the handle's `k`-th vertex at time `t`.
+    /// Where the motion puts the handle's `k`-th vertex at time `t` (see [`Handle::target`]
+    /// for attachments).
     pub fn position(&self, k: usize, t: f64) -> Vec3 {
         let (rot, tr) = self.motion.pose(t);
         self.pivot + tr + rot * (self.rest[k] - self.pivot)
+    }
+
+    /// Where the handle puts its `k`-th vertex at time `t`: its motion's position, or for an
+    /// attachment, its initial position carried by the obstacle from 0 to `t`.
+    pub fn target(&self, k: usize, t: f64, obstacles: &[Obstacle]) -> Vec3 {
+        match self.attach.and_then(|i| obstacles.get(i)) {
+            Some(o) => o.collider.carry(self.rest[k], 0.0, t),
+            None => self.position(k, t),
+        }
     }
 }
 
@@ -117,6 +139,7 @@ impl Handle {
 pub fn step_targets(
     fixed: &[bool],
     handles: &[Handle],
+    obstacles: &[Obstacle],
     x: &[Vec3],
     t0: f64,
     h: f64,
@@ -126,7 +149,7 @@ pub fn step_targets(
     for hd in handles.iter().filter(|hd| hd.holds(t0)) {
         for (k, &p) in hd.particles.iter().enumerate() {
             pinned[p as usize] = true;
-            moving.push((p, (hd.position(k, t0 + h) - x[p as usize]) / h));
+            moving.push((p, (hd.target(k, t0 + h, obstacles) - x[p as usize]) / h));
         }
     }
     moving.sort_by_key(|&(p, _)| p);
@@ -153,6 +176,7 @@ mod tests {
             pivot: None,
             motion: Motion::Keyframed(Track::new(keys, Interpolation::Linear, "h").unwrap()),
             release,
+            attach: None,
         }
     }
 
@@ -174,7 +198,7 @@ mod tests {
         let mut all = vec![Vec3::ZERO; 13];
         all[12] = x[2];
         all[10] = x[0];
-        let (pinned, moving) = step_targets(&[false; 13], &[hd.clone()], &all, 0.0, 0.25);
+        let (pinned, moving) = step_targets(&[false; 13], &[hd.clone()], &[], &all, 0.0, 0.25);
         assert!(pinned[10] && pinned[12] && !pinned[11]);
         assert_eq!(moving.iter().map(|m| m.0).collect::<Vec<_>>(), vec![10, 12]);
         for (p, v) in moving {
@@ -189,7 +213,7 @@ mod tests {
         let x = [Vec3::ZERO, Vec3::X, Vec3::Y];
         let hd = Handle::new(&turning(Some(0.5)), &x, 0, "c").unwrap();
         assert!(hd.holds(0.49) && !hd.holds(0.5));
-        let (pinned, moving) = step_targets(&[false; 3], &[hd], &x, 0.5, 0.1);
+        let (pinned, moving) = step_targets(&[false; 3], &[hd], &[], &x, 0.5, 0.1);
         assert!(pinned.iter().all(|p| !p) && moving.is_empty());
         let err = |d: HandleDesc| {
             Handle::new(&d, &x, 0, "cloth[1].handle[0]")

@@ -17,16 +17,19 @@ const KEYS: &[&str] = &[
     "velocity",
     "angular_velocity",
     "release",
+    "attach",
 ];
 
-/// One `[[cloth.handle]]` of cloth `cloth` (index `i`, rest positions `positions`).
+/// One `[[cloth.handle]]` of cloth `cloth` (index `i`, rest positions `positions`), and the
+/// name of the collider it is attached to (`attach`), which the loader resolves once the
+/// colliders are read.
 pub(super) fn handle(
     i: usize,
     k: usize,
     table: &toml::Table,
     positions: &[Vec3],
     dir: &Path,
-) -> Result<HandleDesc> {
+) -> Result<(HandleDesc, Option<String>)> {
     let keys = Keys::new(table, format!("cloth[{i}].handle[{k}]"), dir);
     if let Some(key) = table.keys().find(|key| !KEYS.contains(&key.as_str())) {
         return Err(keys.error(
@@ -91,10 +94,66 @@ pub(super) fn handle(
         .has("release")
         .then(|| keys.number("release"))
         .transpose()?;
-    Ok(HandleDesc {
-        vertices,
-        pivot: keys.opt_vec3("pivot")?,
-        motion: keys.motion()?,
-        release,
-    })
+    let attach = keys
+        .has("attach")
+        .then(|| keys.string("attach"))
+        .transpose()?;
+    if attach.is_some() {
+        let motion_keys = [
+            "pivot",
+            "keyframes",
+            "interpolation",
+            "velocity",
+            "angular_velocity",
+        ];
+        if let Some(key) = motion_keys.into_iter().find(|key| keys.has(key)) {
+            return Err(keys.error(
+                key,
+                "an attached handle follows its collider: give either attach or a motion, not both",
+            ));
+        }
+    }
+    Ok((
+        HandleDesc {
+            vertices,
+            pivot: keys.opt_vec3("pivot")?,
+            motion: keys.motion()?,
+            release,
+            attach: None,
+        },
+        attach.map(str::to_string),
+    ))
+}
+
+/// Sets each attached handle's collider index from its name; an unknown name is an error
+/// naming the handle's `attach`.
+pub(super) fn resolve_attachments(
+    cloths: &mut [crate::model::ClothDesc],
+    names: &[(usize, usize, String)],
+    obstacles: &[crate::collision::settings::Obstacle],
+) -> Result<()> {
+    for (i, k, name) in names {
+        let index = obstacles
+            .iter()
+            .position(|o| o.name.as_deref() == Some(name.as_str()))
+            .ok_or_else(|| {
+                let known: Vec<String> = obstacles
+                    .iter()
+                    .filter_map(|o| o.name.as_ref().map(|n| format!("'{n}'")))
+                    .collect();
+                crate::Error::field(
+                    format!("cloth[{i}].handle[{k}].attach"),
+                    format!(
+                        "no collider is named '{name}' (named colliders: {})",
+                        if known.is_empty() {
+                            "none".to_string()
+                        } else {
+                            known.join(", ")
+                        }
+                    ),
+                )
+            })?;
+        cloths[*i].handles[*k].attach = Some(index);
+    }
+    Ok(())
 }

@@ -85,6 +85,9 @@ pub struct Scene {
     pub frame_rate: f64,
     /// Gravitational acceleration, m/s² (default `[0, -9.81, 0]`).
     pub gravity: Vec3,
+    /// Seconds simulated before frame 0 with every collider and handle held at its pose at
+    /// `t = 0` (`[simulation] preroll`, default 0): seams close, the cloth settles.
+    pub preroll: f64,
     /// Step settings from `[solver]`.
     pub solver: SolverSettings,
     /// The cloths, in file order.
@@ -128,6 +131,7 @@ struct SimulationTable {
     dt: f64,
     frame_rate: f64,
     gravity: Option<[f64; 3]>,
+    preroll: Option<f64>,
 }
 
 #[derive(Deserialize, Default)]
@@ -283,6 +287,11 @@ impl Scene {
         let dt = positive(s, "dt", sim.dt).map_err(file_err)?;
         let frame_rate = positive(s, "frame_rate", sim.frame_rate).map_err(file_err)?;
         let gravity = Vec3::from_array(sim.gravity.unwrap_or(DEFAULT_GRAVITY));
+        let preroll = match sim.preroll {
+            None => 0.0,
+            Some(p) => crate::validate::nonneg("simulation.preroll", p)
+                .map_err(|e| locate(e, text, path))?,
+        };
         let steps = 1.0 / (frame_rate * dt);
         if whole(steps).is_none() {
             return Err(file_err(format!(
@@ -310,6 +319,7 @@ impl Scene {
         }
         let dir = path.parent().unwrap_or(Path::new(""));
         let mut cloths: Vec<ClothDesc> = Vec::with_capacity(file.cloth.len());
+        let mut attachments = Vec::new();
         for (i, c) in file.cloth.iter().enumerate() {
             let what = format!("cloth[{i}] '{}': ", c.name);
             let mesh = match (&c.mesh, &c.grid) {
@@ -358,13 +368,14 @@ impl Scene {
                 air_drag: c.air_drag.unwrap_or(d.air_drag),
                 mass,
             };
-            let handles = c
-                .handle
-                .iter()
-                .enumerate()
-                .map(|(k, t)| handle::handle(i, k, t, &mesh.positions, dir))
-                .collect::<Result<Vec<_>>>()
-                .map_err(located)?;
+            let mut handles = Vec::with_capacity(c.handle.len());
+            for (k, t) in c.handle.iter().enumerate() {
+                let (h, attach) = handle::handle(i, k, t, &mesh.positions, dir).map_err(located)?;
+                if let Some(name) = attach {
+                    attachments.push((i, k, name));
+                }
+                handles.push(h);
+            }
             cloths.push(ClothDesc {
                 name: c.name.clone(),
                 mesh,
@@ -384,6 +395,7 @@ impl Scene {
             obstacles.push(collider::obstacle(i, c, default_friction, dir).map_err(located)?);
         }
         collider::unique_names(&obstacles).map_err(located)?;
+        handle::resolve_attachments(&mut cloths, &attachments, &obstacles).map_err(located)?;
         if collision.is_none() && !obstacles.is_empty() {
             collision = Some(CollisionSettings::default());
         }
@@ -393,6 +405,7 @@ impl Scene {
             dt,
             frame_rate,
             gravity,
+            preroll,
             solver,
             cloths,
             collision,
@@ -437,6 +450,20 @@ impl Scene {
         m.collision = self.collision;
         m.obstacles = self.obstacles.clone();
         Ok(m)
+    }
+
+    /// Steps of the pre-roll: `ceil(preroll / step_size)` (0 without one).
+    pub fn preroll_steps(&self) -> usize {
+        let n = (self.preroll / self.step_size() - WHOLE_TOLERANCE).ceil();
+        if n > 0.0 { n as usize } else { 0 }
+    }
+
+    /// [`Scene::build`], then the pre-roll ([`Simulation::preroll`]): the simulation at frame 0
+    /// of a fresh run. (A resumed run uses [`Scene::build`] and restores its snapshot.)
+    pub fn start(&self) -> Result<Simulation> {
+        let mut sim = self.build()?;
+        sim.preroll(self.preroll_steps(), self.step_size())?;
+        Ok(sim)
     }
 
     /// Builds the model and the simulation, ready to step with [`Scene::step_size`].

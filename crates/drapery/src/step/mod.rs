@@ -365,6 +365,24 @@ impl Simulation {
         Ok(())
     }
 
+    /// The pre-roll: `steps` steps of `h` ending at `t = 0`, from `t = -steps·h`, during which
+    /// every prescribed motion holds its pose at 0 at rest ([`crate::animation::motion`]); then
+    /// the clock is set to exactly 0 and the step count to 0, so frame 0 is the settled state.
+    /// Nothing happens for 0 steps. On a failed step the error is returned and the simulation
+    /// is left at the last good step.
+    pub fn preroll(&mut self, steps: usize, h: f64) -> Result<()> {
+        if steps == 0 {
+            return Ok(());
+        }
+        self.time = -(steps as f64) * h;
+        for _ in 0..steps {
+            self.step(h)?;
+        }
+        self.time = 0.0;
+        self.steps = 0;
+        Ok(())
+    }
+
     /// Replaces the motion of handle `index` (in the order of [`Model::handles`]: the cloths'
     /// handles in scene order) from now on; it takes effect at the next step, whose end
     /// positions the new motion gives. An error when there is no such handle or the motion is

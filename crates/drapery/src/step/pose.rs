@@ -34,7 +34,14 @@ pub(crate) fn at(model: &Model, t0: f64, h: f64) -> Pose {
         .iter()
         .map(|o| o.collider.speed_bound(t0, t0 + h).0)
         .fold(0.0, f64::max);
-    let (pinned, moving) = step_targets(&model.pinned, &model.handles, &model.x, t0, h);
+    let (pinned, moving) = step_targets(
+        &model.pinned,
+        &model.handles,
+        &model.obstacles,
+        &model.x,
+        t0,
+        h,
+    );
     let surface_speed = moving
         .iter()
         .map(|(_, v)| v.length())

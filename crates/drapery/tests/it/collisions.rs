@@ -482,3 +482,66 @@ fn a_sheet_resting_on_the_ground_under_upward_gravity_lifts_off_freely_in_one_so
         assert!((p.y - (thickness + 9.81 * h * h)).abs() < 1e-8, "{p}");
     }
 }
+
+/// `[simulation] preroll`: the cloth falls and settles on a box during the pre-roll while the
+/// box, which moves at 1 m/s from t = 0 on, is held at its pose at 0 (so friction does not drag
+/// the cloth); the clock then reads exactly 0 and the frames start from the settled state.
+#[test]
+fn preroll_settles_the_cloth_with_every_collider_held_at_its_first_pose() {
+    let text = r#"
+[simulation]
+duration = 0.1
+dt = 0.005
+frame_rate = 20
+preroll = 0.6
+
+[collision]
+thickness = 0.005
+friction = 0.5
+
+[[cloth]]
+name = "sheet"
+grid = { size = [0.3, 0.3], resolution = [7, 7], center = [0.0, 0.3, 0.0], normal = [0.0, 1.0, 0.0] }
+density = 0.1
+
+[[collider]]
+shape = "box"
+center = [0.0, 0.0, 0.0]
+half_extents = [0.5, 0.1, 0.5]
+velocity = [1.0, 0.0, 0.0]
+"#;
+    let scene =
+        drapery::scene::Scene::from_str(text, std::path::Path::new("preroll.toml")).unwrap();
+    assert_eq!(scene.preroll_steps(), 120);
+    let sim = scene.start().unwrap();
+    assert_eq!((sim.time(), sim.steps()), (0.0, 0));
+    let x = sim.positions();
+    // fallen 0.19 m onto the box top (y = 0.1) and resting at the thickness
+    let min_y = x.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+    assert!((min_y - 0.105).abs() < 0.004, "{min_y}");
+    // not dragged along x: the box did not move during the pre-roll
+    let cx = x.iter().map(|p| p.x).sum::<f64>() / x.len() as f64;
+    assert!(cx.abs() < 1e-6, "{cx}");
+    // at rest
+    let vmax = sim
+        .velocities()
+        .iter()
+        .map(|v| v.length())
+        .fold(0.0, f64::max);
+    assert!(vmax < 0.05, "{vmax}");
+    // without a pre-roll the same scene starts in the air
+    let scene0 = drapery::scene::Scene::from_str(
+        &text.replace("preroll = 0.6", ""),
+        std::path::Path::new("p.toml"),
+    )
+    .unwrap();
+    assert_eq!(scene0.preroll_steps(), 0);
+    assert!(
+        scene0
+            .start()
+            .unwrap()
+            .positions()
+            .iter()
+            .all(|p| p.y == 0.3)
+    );
+}

@@ -111,8 +111,12 @@ impl MeshSequence {
         a + s * (self.frames[k + 1][i] - a)
     }
 
-    fn vertex_velocity(&self, k: usize, s: f64, i: usize) -> Vec3 {
-        let _ = s;
+    /// The velocity of vertex `i` in interval `k` (zero past the last file; `before`: zero
+    /// before `t = 0`).
+    fn vertex_velocity(&self, k: usize, before: bool, i: usize) -> Vec3 {
+        if before {
+            return Vec3::ZERO;
+        }
         match self.frames.get(k + 1) {
             Some(b) => (b[i] - self.frames[k][i]) * self.rate,
             None => Vec3::ZERO,
@@ -258,8 +262,8 @@ impl Kind for MeshSequence {
             None => Local::nowhere(p),
             Some((ti, r, k, s)) => {
                 let tri = self.corners(k, s, ti);
-                let [a, b, c] =
-                    self.triangles[ti as usize].map(|i| self.vertex_velocity(k, s, i as usize));
+                let [a, b, c] = self.triangles[ti as usize]
+                    .map(|i| self.vertex_velocity(k, t < 0.0, i as usize));
                 let v = a * r.bary[0] + b * r.bary[1] + c * r.bary[2];
                 Local {
                     velocity: Some(v),
@@ -293,6 +297,9 @@ impl Kind for MeshSequence {
     }
 
     fn speed_bound(&self, t0: f64, t1: f64) -> f64 {
+        if t0.max(t1) < 0.0 {
+            return 0.0;
+        }
         let (k0, _) = self.locate(t0.min(t1));
         let (k1, _) = self.locate(t0.max(t1));
         self.speeds[k0..=k1].iter().copied().fold(0.0, f64::max)
