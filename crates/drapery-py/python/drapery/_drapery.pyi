@@ -165,7 +165,7 @@ def run(
     on_frame: Optional[Callable[[int, npt.NDArray[np.float64]], object]] = None,
 ) -> None:
     """Simulates ``scene`` and writes frame_00000.obj … into ``output`` as ``drapery run`` does
-    (byte for byte); formats "obj" (default) and/or "ply". ``on_frame(k, positions)`` is called
+    (byte for byte); formats "obj" (default), "ply" and/or "pc2" (``<cloth name>.pc2`` caches). ``on_frame(k, positions)`` is called
     after frame k is written, with every particle's positions (float64, (n, 3)); with
     ``formats=[]`` and ``on_frame`` no file is written."""
 
