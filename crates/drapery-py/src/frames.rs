@@ -4,11 +4,13 @@
 //! Frame `k` is the state after `k · steps_per_frame` steps of [`Scene::step_size`], frame 0 the
 //! initial state, up to [`Scene::frame_count`], as `drapery run` does; each frame is written
 //! with the library's writers under the CLI's names ([`frame_path`]): OBJ by
-//! [`ObjWriter`], PLY by [`write_ply`]. The files are byte for byte the CLI's.
+//! [`ObjWriter`], PLY by [`write_ply`], and a sample appended to each cloth's point cache
+//! `<cloth name>.pc2` by [`Pc2Writer`]. The files are byte for byte the CLI's.
 
 use drapery::Simulation;
 use drapery::io::frames::frame_path;
 use drapery::io::obj::ObjWriter;
+use drapery::io::pc2::Pc2Writer;
 use drapery::io::ply::write_ply;
 use drapery::model::ClothInfo;
 use drapery::scene::Scene;
@@ -21,10 +23,12 @@ pub enum FrameFormat {
     Obj,
     /// Binary little-endian PLY with f64 positions, `frame_KKKKK.ply`.
     Ply,
+    /// One PC2 point cache per cloth, `<cloth name>.pc2` (f32, a sample per frame).
+    Pc2,
 }
 
 impl FrameFormat {
-    /// Reads format names (`"obj"`, `"ply"`); duplicates are dropped. An error naming the
+    /// Reads format names (`"obj"`, `"ply"`, `"pc2"`); duplicates are dropped. An error naming the
     /// first name that is not one, or when none is given.
     pub fn parse_list<S: AsRef<str>>(names: &[S]) -> Result<Vec<FrameFormat>, String> {
         let mut out = Vec::new();
@@ -32,23 +36,24 @@ impl FrameFormat {
             let f = match name.as_ref() {
                 "obj" => FrameFormat::Obj,
                 "ply" => FrameFormat::Ply,
+                "pc2" => FrameFormat::Pc2,
                 "glb" | "usd" => {
                     return Err(format!(
-                        "format '{}': drapery.run writes the per-frame formats obj and ply; \
+                        "format '{}': drapery.run writes the per-frame formats obj, ply and pc2; \
                          for glb and usd use the drapery command",
                         name.as_ref()
                     ));
                 }
                 other => {
                     return Err(format!(
-                        "unknown format '{other}' (drapery.run writes obj and ply)"
+                        "unknown format '{other}' (drapery.run writes obj, ply and pc2)"
                     ));
                 }
             };
             out.push(f);
         }
         if out.is_empty() {
-            return Err("no output format given (obj, ply)".into());
+            return Err("no output format given (obj, ply, pc2)".into());
         }
         out.sort();
         out.dedup();
@@ -95,6 +100,8 @@ struct FrameFiles {
     cloths: Vec<ClothInfo>,
     obj: Option<ObjWriter>,
     ply: bool,
+    /// One per cloth, in order (empty without pc2).
+    pc2: Vec<Pc2Writer>,
 }
 
 impl FrameFiles {
@@ -105,8 +112,36 @@ impl FrameFiles {
         if self.ply {
             write_ply(&frame_path(&self.dir, k, "ply"), &self.cloths, x)?;
         }
+        for (cache, c) in self.pc2.iter_mut().zip(&self.cloths) {
+            cache.append(&x[c.range()])?;
+        }
         Ok(())
     }
+}
+
+/// New point caches `dir/<cloth name>.pc2` with no sample yet (start frame 0, a sample per
+/// frame, as the CLI's); a name that cannot name a file is an error naming the cloth.
+fn pc2_caches(dir: &Path, cloths: &[ClothInfo]) -> drapery::Result<Vec<Pc2Writer>> {
+    if let Some((i, c)) = cloths
+        .iter()
+        .enumerate()
+        .find(|(_, c)| c.name.contains(['/', '\\', '\0']))
+    {
+        return Err(drapery::Error::field(
+            format!("cloth[{i}].name"),
+            format!(
+                "'{}' cannot name a file: pc2 writes <cloth name>.pc2",
+                c.name
+            ),
+        ));
+    }
+    cloths
+        .iter()
+        .map(|c| {
+            let path = dir.join(format!("{}.pc2", c.name));
+            Pc2Writer::create(&path, c.mesh.positions.len(), 0.0, 1.0)
+        })
+        .collect()
 }
 
 /// A run in progress: frame 0 is written by [`FrameRun::start`], each further frame by one
@@ -128,12 +163,17 @@ impl FrameRun {
         std::fs::create_dir_all(dir)
             .map_err(|e| RunError::Write(drapery::Error::io(dir.display(), e)))?;
         let cloths = sim.model().cloths().to_vec();
+        let pc2 = match formats.contains(&FrameFormat::Pc2) {
+            true => pc2_caches(dir, &cloths).map_err(RunError::Write)?,
+            false => Vec::new(),
+        };
         let mut files = FrameFiles {
             dir: dir.to_path_buf(),
             obj: formats
                 .contains(&FrameFormat::Obj)
                 .then(|| ObjWriter::new(&cloths)),
             ply: formats.contains(&FrameFormat::Ply),
+            pc2,
             cloths,
         };
         files.write(0, sim.positions()).map_err(RunError::Write)?;
@@ -182,6 +222,7 @@ impl FrameRun {
 mod tests {
     use super::*;
     use drapery::io::obj::read_obj;
+    use drapery::io::pc2::read_pc2;
     use drapery::io::ply::read_ply;
 
     /// A small sheet pinned at one corner: 2 steps per frame, 3 frames.
@@ -213,8 +254,8 @@ initial_velocity = [0.0, 0.0, 0.3]
     #[test]
     fn format_names_are_checked_and_put_in_order() {
         assert_eq!(
-            FrameFormat::parse_list(&["ply", "obj", "ply"]).unwrap(),
-            vec![FrameFormat::Obj, FrameFormat::Ply]
+            FrameFormat::parse_list(&["pc2", "ply", "obj", "ply"]).unwrap(),
+            vec![FrameFormat::Obj, FrameFormat::Ply, FrameFormat::Pc2]
         );
         let e = FrameFormat::parse_list(&["obj", "glb"]).unwrap_err();
         assert!(e.contains("'glb'") && e.contains("drapery command"), "{e}");
@@ -227,18 +268,21 @@ initial_velocity = [0.0, 0.0, 0.3]
     }
 
     #[test]
-    fn frame_k_is_the_state_after_k_frames_of_steps_in_both_formats() {
+    fn frame_k_is_the_state_after_k_frames_of_steps_in_every_format() {
         let scene = scene();
         assert_eq!((scene.steps_per_frame(), scene.frame_count()), (2, 3));
         let dir = tempfile::tempdir().unwrap();
-        let mut run =
-            FrameRun::start(&scene, dir.path(), &[FrameFormat::Obj, FrameFormat::Ply]).unwrap();
+        let all = [FrameFormat::Obj, FrameFormat::Ply, FrameFormat::Pc2];
+        let mut run = FrameRun::start(&scene, dir.path(), &all).unwrap();
         let mut written = vec![];
         while let Some(k) = run.next_frame().unwrap() {
             written.push(k);
         }
         assert_eq!(written, vec![1, 2, 3]);
 
+        let pc2 = read_pc2(&dir.path().join("sheet.pc2")).unwrap();
+        assert_eq!(pc2.samples.len(), 4);
+        assert_eq!((pc2.header.start_frame, pc2.header.sample_rate), (0.0, 1.0));
         let mut reference = scene.build().unwrap();
         for k in 0..=3 {
             if k > 0 {
@@ -254,6 +298,9 @@ initial_velocity = [0.0, 0.0, 0.3]
                     assert_eq!(o[c].to_bits(), w[c].to_bits(), "frame {k} (obj)");
                 }
             }
+            // the cache's sample k: the f32 of frame k
+            let sample: Vec<[f32; 3]> = want.iter().map(|w| w.as_vec3().to_array()).collect();
+            assert_eq!(pc2.samples[k], sample, "frame {k} (pc2)");
         }
         // The cloth moved between frame 0 and frame 3 (the comparison above is not vacuous).
         let first = read_ply(&frame_path(dir.path(), 0, "ply")).unwrap().0;

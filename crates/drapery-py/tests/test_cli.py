@@ -38,6 +38,25 @@ def test_drapery_run_writes_the_commands_files_byte_for_byte(tmp_path, drape_pat
         assert (py / name).read_bytes() == (cli / name).read_bytes(), name
 
 
+def test_drapery_run_writes_the_commands_point_caches_byte_for_byte(tmp_path, drape_path, drapery_bin):
+    cli, py = tmp_path / "cli", tmp_path / "py"
+    cli_run(drapery_bin, drape_path, cli, "pc2")
+    drapery.run(drape_path, py, formats="pc2")
+    assert sorted(p.name for p in py.iterdir()) == ["patch.pc2", "sheet.pc2"]
+    scene = drapery.load_scene(drape_path)
+    sim = drapery.Simulation(scene)
+    sim.advance(scene.frame_count)
+    for name in ["sheet", "patch"]:
+        data = (py / f"{name}.pc2").read_bytes()
+        assert data == (cli / f"{name}.pc2").read_bytes(), name
+        # the header counts every frame; the last sample is the f32 of the last frame
+        n = len(sim.positions(name))
+        assert np.frombuffer(data[16:20], "<i4")[0] == n
+        assert np.frombuffer(data[28:32], "<i4")[0] == scene.frame_count + 1
+        last = np.frombuffer(data[len(data) - 12 * n :], "<f4").reshape(n, 3)
+        assert np.array_equal(last, sim.positions(name).astype(np.float32))
+
+
 def test_drapery_run_takes_a_scene_object_and_a_comma_list(tmp_path, hang_dict):
     scene = drapery.Scene.from_dict(hang_dict)
     drapery.run(scene, tmp_path, formats="ply,obj")

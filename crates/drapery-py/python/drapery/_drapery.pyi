@@ -1,7 +1,7 @@
 """Type stubs of the native module drapery._drapery (re-exported by drapery)."""
 
 import os
-from typing import Any, Callable, Dict, Mapping, Optional, Sequence, Union, final
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -22,6 +22,12 @@ __all__ = [
 __version__: str
 
 _StrPath = Union[str, "os.PathLike[str]"]
+# A collider: its index in the scene or its ``name``.
+_Collider = Union[int, str]
+# A handle: its index in ``Simulation.handles`` or ``(cloth name, k)``, the cloth's k-th handle.
+_Handle = Union[int, Tuple[str, int]]
+# A pose: translation (3,) and rotation, a unit quaternion [x, y, z, w] (4,).
+_Pose = Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]
 
 class DraperyError(Exception):
     """Base class of drapery's errors."""
@@ -116,6 +122,38 @@ class Simulation:
         """Sets velocities (shape (n, 3)); as set_positions."""
     def faces(self, cloth: Optional[str] = None) -> npt.NDArray[np.int64]:
         """Triangles, shape (m, 3): of the cloth named (indexing positions(cloth)) or of all."""
+    @property
+    def colliders(self) -> List[Optional[str]]:
+        """The colliders' names (None where a collider has none), in scene order."""
+    @property
+    def handles(self) -> List[Tuple[str, int]]:
+        """Every handle as ``(cloth name, k)``, in the order of the handle indices."""
+    def set_collider_pose(
+        self,
+        collider: _Collider,
+        translation: npt.ArrayLike,
+        rotation: npt.ArrayLike = (0.0, 0.0, 0.0, 1.0),
+        time: Optional[float] = None,
+    ) -> None:
+        """Moves a collider linearly from its pose at ``sim.time`` to ``translation``,
+        ``rotation`` (quaternion [x, y, z, w]: x = c + T + R (x0 - c), c its center), reached at
+        ``time`` (default: the end of the next step) and held; IndexError, ValueError or
+        TypeError naming the argument."""
+    def set_handle_pose(
+        self,
+        handle: _Handle,
+        translation: npt.ArrayLike,
+        rotation: npt.ArrayLike = (0.0, 0.0, 0.0, 1.0),
+        time: Optional[float] = None,
+    ) -> None:
+        """Moves a handle's vertices as ``set_collider_pose`` a collider (about its pivot);
+        ValueError too for a handle already released."""
+    def collider_pose(self, collider: _Collider) -> _Pose:
+        """``(translation, rotation)`` of a collider at ``sim.time``."""
+    def handle_pose(self, handle: _Handle) -> _Pose:
+        """``(translation, rotation)`` of a handle at ``sim.time``."""
+    def handle_vertices(self, handle: _Handle) -> npt.NDArray[np.int64]:
+        """The handle's vertices: rows of ``positions(cloth)``, cloth ``handles[i][0]``."""
     def save_state(self) -> bytes:
         """The whole state, exact to the bit, with the scene's fingerprint."""
 
@@ -127,7 +165,7 @@ def run(
     on_frame: Optional[Callable[[int, npt.NDArray[np.float64]], object]] = None,
 ) -> None:
     """Simulates ``scene`` and writes frame_00000.obj … into ``output`` as ``drapery run`` does
-    (byte for byte); formats "obj" (default) and/or "ply". ``on_frame(k, positions)`` is called
+    (byte for byte); formats "obj" (default), "ply" and/or "pc2" (``<cloth name>.pc2`` caches). ``on_frame(k, positions)`` is called
     after frame k is written, with every particle's positions (float64, (n, 3)); with
     ``formats=[]`` and ``on_frame`` no file is written."""
 

@@ -2,6 +2,7 @@
 //! (python/drapery/__init__.py); its types are in python/drapery/_drapery.pyi.
 
 mod arrays;
+mod control;
 mod dict;
 mod errors;
 mod report;

@@ -30,8 +30,9 @@ fn py_error(e: RunError) -> PyErr {
 
 /// Simulates `scene` (a Scene, or the path of a scene file) and writes every frame into the
 /// folder `output` as `drapery run` does: frame_00000.obj (the initial state) to the last
-/// frame, byte for byte the CLI's files. `formats`: "obj" and/or "ply" (a list, or one string
-/// "obj,ply"). Existing frame files of the same names are replaced; no resume state is
+/// frame, byte for byte the CLI's files. `formats`: "obj", "ply" and/or "pc2" (a point cache
+/// `<cloth name>.pc2` per cloth, a sample per frame) as a list, or one string "obj,ply".
+/// Existing files of the same names are replaced; no resume state is
 /// written (use the drapery command for --resume, glb and usd). `on_frame(k, positions)`, when
 /// given, is called after frame k is written with its positions (a new float64 array (n, 3),
 /// every particle) — the data of the files without reading them back; with `formats=[]` no

@@ -8,13 +8,16 @@
 //!
 //! [`Scene::step_size`]: drapery::scene::Scene::step_size
 
-use super::arrays::{triangle_array, vec3_array, vec3s};
+use super::arrays::{index_array, triangle_array, vec3_array, vec3s};
+use super::control::{
+    PosePair, collider_index, handle_cloth, handle_index, handle_names, pose_arg, pose_arrays, ramp,
+};
 use super::errors::{simulation_error, state_error};
 use super::report::report_dict;
 use super::scene::{Loaded, PyScene};
 use drapery::snapshot::Snapshot;
 use drapery::{Simulation, StepReport, Vec3};
-use numpy::PyArray2;
+use numpy::{PyArray1, PyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
@@ -80,6 +83,11 @@ impl PySimulation {
         let report = py.detach(|| self.step_here()).map_err(simulation_error)?;
         self.last = Some(report);
         Ok(())
+    }
+
+    /// The time a pose set now is reached: `time`, or the end of the next step.
+    fn until(&self, time: Option<f64>) -> f64 {
+        time.unwrap_or_else(|| self.sim.time() + self.loaded.scene.step_size())
     }
 
     /// The particle range of `cloth` (a name), or every particle.
@@ -298,6 +306,132 @@ impl PySimulation {
             }
         };
         triangle_array(py, &triangles)
+    }
+
+    /// The colliders' names (`name = "..."`), None for a collider without one, in scene order
+    /// (the indices `set_collider_pose` takes).
+    #[getter]
+    fn colliders(&self) -> Vec<Option<String>> {
+        self.sim
+            .model()
+            .obstacles()
+            .iter()
+            .map(|o| o.name.clone())
+            .collect()
+    }
+
+    /// Every handle (`[[cloth.handle]]`) as `(cloth name, k)`, the cloth's k-th handle, in the
+    /// order of the indices `set_handle_pose` takes (cloths in scene order, each cloth's
+    /// handles in order).
+    #[getter]
+    fn handles(&self) -> Vec<(String, usize)> {
+        handle_names(self.sim.model())
+    }
+
+    /// Moves collider `collider` (an index or its `name`) to the pose `translation`,
+    /// `rotation` (a quaternion [x, y, z, w], normalized) at `time`: a point at x0 at t = 0
+    /// is then at c + T + R (x0 - c), c the collider's center in the scene. From its pose at
+    /// `sim.time` it moves linearly (lerp, slerp) to the new pose, reached at `time` (default:
+    /// the end of the next step, sim.time + scene.step_size), and holds it afterwards; this
+    /// replaces its motion from the scene (or an earlier call). Raises IndexError (index out
+    /// of range), ValueError (unknown name, a non-finite number, a zero quaternion, `time`
+    /// not after sim.time) or TypeError, naming the argument and changing nothing. The motion
+    /// set is not part of save_state().
+    #[pyo3(
+        signature = (collider, translation, rotation = None, time = None),
+        text_signature = "(self, collider, translation, rotation=(0.0, 0.0, 0.0, 1.0), time=None)"
+    )]
+    fn set_collider_pose(
+        &mut self,
+        collider: &Bound<'_, PyAny>,
+        translation: &Bound<'_, PyAny>,
+        rotation: Option<&Bound<'_, PyAny>>,
+        time: Option<f64>,
+    ) -> PyResult<()> {
+        let i = collider_index(self.sim.model(), collider)?;
+        let to = pose_arg(translation, rotation)?;
+        let motion = &self.sim.model().obstacles()[i].collider.motion;
+        let field = format!("collider[{i}]");
+        let motion = ramp(motion, self.sim.time(), self.until(time), to, &field)?;
+        self.sim
+            .set_obstacle_motion(i, motion)
+            .map_err(simulation_error)
+    }
+
+    /// Moves handle `handle` (an index into `handles`, or a `(cloth name, k)` pair) to the
+    /// pose `translation`, `rotation` at `time`, as `set_collider_pose` does a collider: its
+    /// vertices go from where the handle's motion puts them at sim.time linearly to
+    /// p + T + R (x0 - p), x0 their initial positions and p the handle's pivot, reached at
+    /// `time` (default: the end of the next step) and held afterwards. Raises as
+    /// `set_collider_pose`, and ValueError for a handle already released.
+    #[pyo3(
+        signature = (handle, translation, rotation = None, time = None),
+        text_signature = "(self, handle, translation, rotation=(0.0, 0.0, 0.0, 1.0), time=None)"
+    )]
+    fn set_handle_pose(
+        &mut self,
+        handle: &Bound<'_, PyAny>,
+        translation: &Bound<'_, PyAny>,
+        rotation: Option<&Bound<'_, PyAny>>,
+        time: Option<f64>,
+    ) -> PyResult<()> {
+        let i = handle_index(self.sim.model(), handle)?;
+        let to = pose_arg(translation, rotation)?;
+        let now = self.sim.time();
+        let h = &self.sim.model().handles()[i];
+        if let Some(r) = h.release.filter(|_| !h.holds(now)) {
+            return Err(PyValueError::new_err(format!(
+                "handle: handle {i} was released at {r} s (sim.time = {now} s): its vertices are free"
+            )));
+        }
+        let field = format!("handle[{i}]");
+        let motion = ramp(&h.motion, now, self.until(time), to, &field)?;
+        self.sim
+            .set_handle_motion(i, motion)
+            .map_err(simulation_error)
+    }
+
+    /// The pose of collider `collider` (an index or its name) at sim.time, as new float64
+    /// arrays `(translation (3,), rotation (4,))`, rotation a unit quaternion [x, y, z, w]
+    /// (q and -q are the same rotation).
+    fn collider_pose<'py>(
+        &self,
+        py: Python<'py>,
+        collider: &Bound<'_, PyAny>,
+    ) -> PyResult<PosePair<'py>> {
+        let i = collider_index(self.sim.model(), collider)?;
+        let motion = &self.sim.model().obstacles()[i].collider.motion;
+        Ok(pose_arrays(py, motion, self.sim.time()))
+    }
+
+    /// The pose of handle `handle` (an index or a `(cloth name, k)` pair) at sim.time, as
+    /// `collider_pose` (after its release: the pose its motion would give).
+    fn handle_pose<'py>(
+        &self,
+        py: Python<'py>,
+        handle: &Bound<'_, PyAny>,
+    ) -> PyResult<PosePair<'py>> {
+        let i = handle_index(self.sim.model(), handle)?;
+        let motion = &self.sim.model().handles()[i].motion;
+        Ok(pose_arrays(py, motion, self.sim.time()))
+    }
+
+    /// The vertices handle `handle` holds, as an int64 array of the rows of
+    /// `positions(cloth)` (cloth-local indices, in the scene's order), `cloth` being
+    /// `handles[i][0]`.
+    fn handle_vertices<'py>(
+        &self,
+        py: Python<'py>,
+        handle: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let model = self.sim.model();
+        let i = handle_index(model, handle)?;
+        let offset = model.cloths()[handle_cloth(model, i)].offset;
+        let local = model.handles()[i]
+            .particles
+            .iter()
+            .map(|&p| p as i64 - offset as i64);
+        Ok(index_array(py, local))
     }
 
     /// The whole state (positions, velocities, the solver's warm start, time, step count) as
