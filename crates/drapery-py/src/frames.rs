@@ -159,7 +159,7 @@ impl FrameRun {
     /// Builds the simulation, creates `dir` (existing frame files of the same names are
     /// replaced) and writes frame 0.
     pub fn start(scene: &Scene, dir: &Path, formats: &[FrameFormat]) -> Result<FrameRun, RunError> {
-        let sim = scene.build().map_err(RunError::Build)?;
+        let sim = scene.start().map_err(RunError::Build)?;
         std::fs::create_dir_all(dir)
             .map_err(|e| RunError::Write(drapery::Error::io(dir.display(), e)))?;
         let cloths = sim.model().cloths().to_vec();

@@ -76,3 +76,26 @@ def test_drapery_run_refuses_formats_it_does_not_write_before_writing(tmp_path, 
     assert not out.exists()
     with pytest.raises(drapery.SceneError, match="missing.toml"):
         drapery.run(tmp_path / "missing.toml", out)
+
+
+def test_a_prerolled_scene_gives_the_bits_of_drapery_run(tmp_path, drape_path, drapery_bin):
+    """`[simulation] preroll`: Python's Simulation and drapery.run settle the cloth before
+    frame 0 exactly as the command does."""
+    text = drape_path.read_text().replace("frame_rate = 60\n", "frame_rate = 60\npreroll = 0.1\n", 1)
+    scene_path = tmp_path / "preroll.toml"
+    scene_path.write_text(text)
+    out = tmp_path / "cli"
+    cli_run(drapery_bin, scene_path, out, "ply")
+    scene = drapery.load_scene(scene_path)
+    sim = drapery.Simulation(scene)
+    assert sim.time == 0.0
+    first = read_ply_positions(out / "frame_00000.ply")
+    assert sim.positions().tobytes() == first.tobytes()
+    # the pre-roll moved the cloth: frame 0 is not the scene's initial grid
+    plain = drapery.Simulation(drapery.load_scene(drape_path))
+    assert not np.array_equal(plain.positions(), first)
+    sim.advance(2)
+    assert sim.positions().tobytes() == read_ply_positions(out / "frame_00002.ply").tobytes()
+    py_out = tmp_path / "py"
+    drapery.run(scene_path, py_out, formats=["ply"])
+    assert (py_out / "frame_00000.ply").read_bytes() == (out / "frame_00000.ply").read_bytes()

@@ -130,13 +130,22 @@ impl PySimulation {
 
 #[pymethods]
 impl PySimulation {
-    /// A new simulation of `scene` at its initial state. `threads`: the size of a thread pool
+    /// A new simulation of `scene` at its initial state (after its `preroll`, if any). `threads`: the size of a thread pool
     /// of this simulation's own that every step runs in (default: rayon's global pool, one
     /// thread per core). The results are the same bits whatever the thread count.
     #[new]
     #[pyo3(signature = (scene, threads = None))]
     fn new(scene: PyRef<'_, PyScene>, threads: Option<usize>) -> PyResult<PySimulation> {
-        PySimulation::build(&scene, threads)
+        let mut s = PySimulation::build(&scene, threads)?;
+        // `[simulation] preroll`: settled before frame 0, as `drapery run` does
+        let (steps, h) = (s.loaded.scene.preroll_steps(), s.loaded.scene.step_size());
+        let sim = &mut s.sim;
+        match &s.pool {
+            Some(pool) => pool.install(|| sim.preroll(steps, h)),
+            None => sim.preroll(steps, h),
+        }
+        .map_err(|e| simulation_error(e.to_string()))?;
+        Ok(s)
     }
 
     /// A simulation of `scene` continuing from `state` (bytes from `save_state`, or a
