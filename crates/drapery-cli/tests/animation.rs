@@ -5,7 +5,7 @@
 //! the file and the field.
 
 mod common;
-use common::{drapery, run_and_check};
+use common::{assert_rejected, run_and_check};
 use drapery::Vec3;
 use drapery::scene::Scene;
 
@@ -144,50 +144,8 @@ fn cape_stays_attached_to_the_moving_body_after_settling_in_the_preroll() {
 
 // ------------------------------------------------------------------------------ bad input
 
-const BASE: &str = r#"
-[simulation]
-duration = 0.1
-dt = 0.01
-frame_rate = 20
-
-[[cloth]]
-name = "sheet"
-grid = { size = [0.4, 0.4], resolution = [5, 5], center = [0.0, 0.5, 0.0], normal = [0.0, 1.0, 0.0] }
-density = 0.1
-"#;
-
 const BOX: &str =
     "[[collider]]\nshape = \"box\"\ncenter = [0, 0, 0]\nhalf_extents = [0.1, 0.1, 0.1]\n";
-
-fn assert_rejected(extra: &str, files: &[(&str, &str)], wants: &[&str]) {
-    let t = tempfile::tempdir().expect("temp dir");
-    for (name, content) in files {
-        let path = t.path().join(name);
-        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-        std::fs::write(path, content).expect("write");
-    }
-    let scene = t.path().join("scene.toml");
-    std::fs::write(&scene, format!("{BASE}\n{extra}")).expect("write");
-    let out = t.path().join("out");
-    let r = drapery(&[
-        "run".as_ref(),
-        scene.as_os_str(),
-        "-o".as_ref(),
-        out.as_os_str(),
-    ]);
-    assert_eq!(r.code, Some(1), "{extra}: {}", r.stderr);
-    let lines: Vec<&str> = r.stderr.lines().collect();
-    assert_eq!(lines.len(), 1, "{:?}", r.stderr);
-    assert!(
-        lines[0].starts_with("error: ") && lines[0].contains("scene.toml"),
-        "{}",
-        lines[0]
-    );
-    for w in wants {
-        assert!(lines[0].contains(w), "{w:?} not in {:?}", lines[0]);
-    }
-    assert!(!out.exists(), "output written for bad input");
-}
 
 #[test]
 fn bad_keyframes_are_named() {

@@ -8,7 +8,7 @@ use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{drapery, examples, run_and_check};
+use common::{BASE, assert_rejected, drapery, examples, run_and_check};
 
 fn min_y(x: &[Vec3]) -> f64 {
     x.iter().map(|p| p.y).fold(f64::INFINITY, f64::min)
@@ -191,18 +191,6 @@ fn scene_case(text: &str, files: &[(&str, &str)]) -> (tempfile::TempDir, PathBuf
     std::fs::write(&s, text).expect("write");
     (t, s)
 }
-
-const BASE: &str = r#"
-[simulation]
-duration = 0.1
-dt = 0.01
-frame_rate = 20
-
-[[cloth]]
-name = "sheet"
-grid = { size = [0.4, 0.4], resolution = [5, 5], center = [0.0, 0.5, 0.0], normal = [0.0, 1.0, 0.0] }
-density = 0.1
-"#;
 
 const PLATE: &str = "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nf 1 4 3 2\n";
 
@@ -454,25 +442,6 @@ fn editing_a_mesh_collider_changes_the_fingerprint() {
 }
 
 // --------------------------------------------------------------------------- bad input
-
-fn assert_rejected(extra: &str, files: &[(&str, &str)], wants: &[&str]) {
-    let (t, s) = scene_case(&format!("{BASE}\n{extra}"), files);
-    let out = t.path().join("out");
-    let r = drapery(&[
-        "run".as_ref(),
-        s.as_os_str(),
-        "-o".as_ref(),
-        out.as_os_str(),
-    ]);
-    assert_eq!(r.code, Some(1), "{extra}: {}", r.stderr);
-    let lines: Vec<&str> = r.stderr.lines().collect();
-    assert_eq!(lines.len(), 1, "{:?}", r.stderr);
-    assert!(lines[0].starts_with("error: "), "{}", lines[0]);
-    for w in wants {
-        assert!(lines[0].contains(w), "{w:?} not in {:?}", lines[0]);
-    }
-    assert!(!out.exists(), "output written for bad input");
-}
 
 #[test]
 fn negative_thickness_or_friction_is_refused() {
