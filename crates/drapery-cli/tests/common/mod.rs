@@ -146,8 +146,8 @@ density = 0.1
 "#;
 
 /// Runs [`BASE`] plus `extra` as `scene.toml` in a temporary folder holding `files` (paths
-/// relative to it): the run must fail with exit code 1 and one error line naming the scene file
-/// and containing every `wants`, and write no output.
+/// relative to it): the run must fail with exit code 1 and one error line containing every
+/// `wants` (the file at fault and the field), and write no output.
 pub fn assert_rejected(extra: &str, files: &[(&str, &str)], wants: &[&str]) {
     let t = tempfile::tempdir().expect("temp dir");
     for (name, content) in files {
@@ -167,11 +167,7 @@ pub fn assert_rejected(extra: &str, files: &[(&str, &str)], wants: &[&str]) {
     assert_eq!(r.code, Some(1), "{extra}: {}", r.stderr);
     let lines: Vec<&str> = r.stderr.lines().collect();
     assert_eq!(lines.len(), 1, "{:?}", r.stderr);
-    assert!(
-        lines[0].starts_with("error: ") && lines[0].contains("scene.toml"),
-        "{}",
-        lines[0]
-    );
+    assert!(lines[0].starts_with("error: "), "{}", lines[0]);
     for w in wants {
         assert!(lines[0].contains(w), "{w:?} not in {:?}", lines[0]);
     }
