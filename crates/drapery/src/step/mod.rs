@@ -40,7 +40,9 @@ pub use settings::{LinearSolver, SolverSettings};
 
 use crate::constraints::obstacle::ActiveSet;
 use crate::error::Result;
-use crate::forces::{AirDrag, Force, Gravity, Linearization, SpringDamping, Springs, State};
+use crate::forces::{
+    AirDrag, Force, Gravity, Linearization, SpringDamping, Springs, State, Stitches,
+};
 use crate::linalg::BlockMatrix;
 use crate::linalg::pcg::Preconditioner;
 use crate::math::Vec3;
@@ -462,7 +464,7 @@ impl Simulation {
 }
 
 /// The forces of a model: gravity, then springs and spring damping (the springs with a
-/// nonzero coefficient), then air drag if any particle has it.
+/// nonzero coefficient), then the stitches if any, then air drag if any particle has it.
 fn model_forces(model: &Model, settings: &SolverSettings) -> Vec<Box<dyn Force>> {
     let s = &model.springs;
     let stiff: Vec<usize> = (0..s.len()).filter(|&k| s.stiffness[k] > 0.0).collect();
@@ -484,6 +486,16 @@ fn model_forces(model: &Model, settings: &SolverSettings) -> Vec<Box<dyn Force>>
             j: damped.iter().map(|&k| s.j[k]).collect(),
             c: damped.iter().map(|&k| s.damping[k]).collect(),
             position_jacobian: settings.damping_x_jacobian,
+            sums: Default::default(),
+        }));
+    }
+    if !model.stitches.is_empty() {
+        let st = &model.stitches;
+        forces.push(Box::new(Stitches {
+            a: st.iter().map(|p| p.a).collect(),
+            b: st.iter().map(|p| p.b).collect(),
+            k: st.iter().map(|p| p.stiffness).collect(),
+            c: st.iter().map(|p| p.damping).collect(),
             sums: Default::default(),
         }));
     }
