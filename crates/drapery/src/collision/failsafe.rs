@@ -21,6 +21,7 @@ use super::ccd::{
     vertex_triangle_may_touch, vertex_triangle_toi,
 };
 use super::distance::{point_triangle, segment_segment};
+use super::seams::Seams;
 use super::settings::Obstacle;
 use crate::math::Vec3;
 use rayon::prelude::*;
@@ -179,6 +180,32 @@ pub fn failsafe(
     thickness: f64,
     self_collision: bool,
 ) -> Result<FailsafeReport, String> {
+    let args = (t0, h, thickness, self_collision);
+    failsafe_with_seams(
+        x0,
+        x1,
+        pinned,
+        triangles,
+        edges,
+        obstacles,
+        args,
+        &Seams::default(),
+    )
+}
+
+/// [`failsafe`] letting through the cloth pairs within a stitched neighbourhood of `seams`, so
+/// that seams can close. `(t0, h, thickness, self_collision)` as for [`failsafe`].
+#[allow(clippy::too_many_arguments)]
+pub fn failsafe_with_seams(
+    x0: &[Vec3],
+    x1: &mut [Vec3],
+    pinned: &[bool],
+    triangles: &[[u32; 3]],
+    edges: &[[u32; 2]],
+    obstacles: &[Obstacle],
+    (t0, h, thickness, self_collision): (f64, f64, f64, bool),
+    seams: &Seams,
+) -> Result<FailsafeReport, String> {
     let n = x0.len();
     let mut report = FailsafeReport::default();
     let stop = 0.1 * thickness;
@@ -266,7 +293,7 @@ pub fn failsafe(
     let is_cloth = |i: u32| (i as usize) < n;
     let keep = |ids: &[u32; 4]| {
         let cloth = ids.iter().filter(|&&i| is_cloth(i)).count();
-        cloth > 0 && (cloth < ids.len() || self_collision)
+        cloth > 0 && (cloth < ids.len() || self_collision) && !seams.exempt(ids)
     };
     let impact = |ids: [u32; 4], vt: bool, ye: &[Vec3]| {
         keep(&ids).then(|| impact(ids, vt, &ys0, ye, tol)).flatten()

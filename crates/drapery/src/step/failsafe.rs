@@ -4,7 +4,8 @@
 //! theirs (a position correction, not a motion).
 
 use super::pose::Pose;
-use crate::collision::failsafe::failsafe;
+use crate::collision::failsafe::failsafe_with_seams;
+use crate::collision::seams::Seams;
 use crate::collision::settings::CollisionSettings;
 use crate::math::Vec3;
 use crate::model::Model;
@@ -18,23 +19,22 @@ pub(crate) fn run(
     triangles: &[[u32; 3]],
     edges: &[[u32; 2]],
     pose: &Pose,
+    seams: &Seams,
     x0: &[Vec3],
     x: &mut [Vec3],
     v: &mut [Vec3],
 ) -> Result<usize, String> {
     let h = pose.h;
     let before = x.to_vec();
-    let r = failsafe(
+    let r = failsafe_with_seams(
         x0,
         x,
         &pose.pinned,
         triangles,
         edges,
         &model.obstacles,
-        pose.t0,
-        h,
-        settings.thickness,
-        settings.self_collision,
+        (pose.t0, h, settings.thickness, settings.self_collision),
+        seams,
     )?;
     let mut keep_velocity = vec![false; x.len()];
     r.projected
@@ -72,7 +72,18 @@ mod tests {
         v[0] = Vec3::new(0.0, -10.0, 0.0);
         let mut x: Vec<Vec3> = x0.iter().zip(&v).map(|(p, u)| *p + h * *u).collect();
         let moved_before = x.clone();
-        run(&m, &settings, &[], &[], &pose, &x0, &mut x, &mut v).unwrap();
+        run(
+            &m,
+            &settings,
+            &[],
+            &[],
+            &pose,
+            &Seams::default(),
+            &x0,
+            &mut x,
+            &mut v,
+        )
+        .unwrap();
         assert!(x[0].y >= 0.0 && x[0].y < x0[0].y, "{}", x[0]);
         assert_eq!(v[0], (x[0] - x0[0]) / h);
         // the others were not touched

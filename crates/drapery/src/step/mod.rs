@@ -38,6 +38,7 @@ mod testing;
 pub use report::{StageTimes, StepReport};
 pub use settings::{LinearSolver, SolverSettings};
 
+use crate::collision::seams::Seams;
 use crate::constraints::obstacle::ActiveSet;
 use crate::error::Result;
 use crate::forces::{
@@ -73,6 +74,8 @@ pub struct Simulation {
     initial: (Vec<Vec3>, Vec<Vec3>),
     triangles: Vec<[u32; 3]>,
     edges: Vec<[u32; 2]>,
+    /// The stitched neighbourhoods exempt from cloth–cloth contact.
+    seams: Seams,
     work: Work,
     solvers: Solvers,
 }
@@ -102,6 +105,8 @@ impl Simulation {
         let system = System::new(n, &forces);
         let (triangles, edges) = (model.triangles(), model.edges());
         let initial = (model.x.clone(), model.v.clone());
+        let stitched: Vec<[u32; 2]> = model.stitches.iter().map(|p| [p.a, p.b]).collect();
+        let seams = Seams::new(n, &triangles, &stitched);
         Ok(Simulation {
             warm_start: vec![Vec3::ZERO; n],
             model,
@@ -113,6 +118,7 @@ impl Simulation {
             initial,
             triangles,
             edges,
+            seams,
             work: Work::default(),
             solvers: Solvers::default(),
         })
@@ -145,7 +151,14 @@ impl Simulation {
             pose::at(&self.model, self.time, h)
         });
         let contacts = timed(&mut report.stages.detect, || {
-            let c = detect::contacts(&self.model, &self.triangles, &self.edges, &start, &pose);
+            let c = detect::contacts(
+                &self.model,
+                &self.triangles,
+                &self.edges,
+                &start,
+                &pose,
+                &self.seams,
+            );
             self.system.use_contacts(c.repulsions.as_ref());
             c
         });
@@ -249,6 +262,7 @@ impl Simulation {
                     &self.triangles,
                     &self.edges,
                     &pose,
+                    &self.seams,
                     &start.x0,
                     &mut x,
                     &mut v,
