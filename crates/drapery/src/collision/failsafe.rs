@@ -165,8 +165,9 @@ fn sweep(o: &Obstacle, x0: Vec3, x1: Vec3, t0: f64, h: f64, stop: f64) -> Option
     Some(s)
 }
 
-/// Makes the end-of-step positions `x1` free of crossings (see the module docs). Returns the
-/// report, or a message when collisions could not be resolved.
+/// Makes the end-of-step positions `x1` free of crossings (see the module docs), letting
+/// through the cloth pairs within a stitched neighbourhood of `seams` so that seams can close.
+/// Returns the report, or a message when collisions could not be resolved.
 #[allow(clippy::too_many_arguments)]
 pub fn failsafe(
     x0: &[Vec3],
@@ -179,31 +180,6 @@ pub fn failsafe(
     h: f64,
     thickness: f64,
     self_collision: bool,
-) -> Result<FailsafeReport, String> {
-    let args = (t0, h, thickness, self_collision);
-    failsafe_with_seams(
-        x0,
-        x1,
-        pinned,
-        triangles,
-        edges,
-        obstacles,
-        args,
-        &Seams::default(),
-    )
-}
-
-/// [`failsafe`] letting through the cloth pairs within a stitched neighbourhood of `seams`, so
-/// that seams can close. `(t0, h, thickness, self_collision)` as for [`failsafe`].
-#[allow(clippy::too_many_arguments)]
-pub fn failsafe_with_seams(
-    x0: &[Vec3],
-    x1: &mut [Vec3],
-    pinned: &[bool],
-    triangles: &[[u32; 3]],
-    edges: &[[u32; 2]],
-    obstacles: &[Obstacle],
-    (t0, h, thickness, self_collision): (f64, f64, f64, bool),
     seams: &Seams,
 ) -> Result<FailsafeReport, String> {
     let n = x0.len();
@@ -514,7 +490,7 @@ mod tests {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                 pool.install(|| {
                     let mut got = x1.clone();
-                    let r = failsafe(&x0, &mut got, &pinned, &tris, &edges, &[], 0.0, 0.01, 0.005, true);
+                    let r = failsafe(&x0, &mut got, &pinned, &tris, &edges, &[], 0.0, 0.01, 0.005, true, &crate::collision::seams::Seams::default());
                     (got, r)
                 })
             };
@@ -564,6 +540,7 @@ mod tests {
                 0.01,
                 thickness,
                 true,
+                &crate::collision::seams::Seams::default(),
             );
             r.unwrap();
             x = x1;
@@ -591,6 +568,7 @@ mod tests {
             0.01,
             0.005,
             true,
+            &crate::collision::seams::Seams::default(),
         )
         .unwrap_err();
         assert!(e.contains("particles 0 (pinned)"), "{e}");

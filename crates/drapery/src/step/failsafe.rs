@@ -4,7 +4,7 @@
 //! theirs (a position correction, not a motion).
 
 use super::pose::Pose;
-use crate::collision::failsafe::failsafe_with_seams;
+use crate::collision::failsafe::failsafe;
 use crate::collision::seams::Seams;
 use crate::collision::settings::CollisionSettings;
 use crate::math::Vec3;
@@ -26,14 +26,17 @@ pub(crate) fn run(
 ) -> Result<usize, String> {
     let h = pose.h;
     let before = x.to_vec();
-    let r = failsafe_with_seams(
+    let r = failsafe(
         x0,
         x,
         &pose.pinned,
         triangles,
         edges,
         &model.obstacles,
-        (pose.t0, h, settings.thickness, settings.self_collision),
+        pose.t0,
+        h,
+        settings.thickness,
+        settings.self_collision,
         seams,
     )?;
     let mut keep_velocity = vec![false; x.len()];
