@@ -113,4 +113,33 @@ mod tests {
         let c = contacts(&m, &tris, &edges, &start(&m), &pose, &Seams::default());
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
     }
+
+    /// The folded sheet again, its halves stitched vertex to vertex: every close pair lies in a
+    /// stitched neighbourhood and gets no repulsion; one stitch leaves the others' pairs.
+    #[test]
+    fn pairs_within_a_stitched_neighbourhood_get_no_repulsion() {
+        let mut m = testing::sheet_on_ground(4, 0.5);
+        for i in 8..16 {
+            m.x[i] = m.x[i - 8] + Vec3::new(0.0, 0.002, 0.0);
+        }
+        let start = Start {
+            x0: m.x.clone(),
+            v0: vec![Vec3::ZERO; m.particle_count()],
+            ke0: 0.0,
+        };
+        let (tris, edges) = (m.triangles(), m.edges());
+        let pose = pose::at(&m, 0.0, 0.01);
+        let n = m.particle_count();
+        let count = |seams: &Seams| {
+            contacts(&m, &tris, &edges, &start, &pose, seams)
+                .repulsions
+                .map_or(0, |r| r.stencils.len())
+        };
+        let all: Vec<[u32; 2]> = (8..16).map(|i| [i, i - 8]).collect();
+        let unsewn = count(&Seams::default());
+        assert!(unsewn > 0);
+        assert_eq!(count(&Seams::new(n, &tris, &all)), 0);
+        let one = count(&Seams::new(n, &tris, &all[..1]));
+        assert!(0 < one && one < unsewn, "{one} of {unsewn}");
+    }
 }

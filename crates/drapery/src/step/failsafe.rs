@@ -93,4 +93,35 @@ mod tests {
         assert_eq!(&x[1..], &moved_before[1..]);
         assert!(v[1..].iter().all(|u| *u == Vec3::new(0.0, -1.0, 0.0)));
     }
+
+    /// Two stacked rows pushed onto each other over a step: the fail-safe holds them apart,
+    /// unless they are stitched vertex to vertex (a seam closing).
+    #[test]
+    fn a_stitched_pair_may_close_through_the_failsafe() {
+        let mut m = testing::sheet_on_ground(4, 0.5);
+        for i in 8..16 {
+            m.x[i] = m.x[i - 8] + Vec3::new(0.0, 0.002, 0.0);
+        }
+        let settings = m.collision.unwrap();
+        let pose = crate::step::pose::at(&m, 0.0, 0.01);
+        let (tris, edges) = (m.triangles(), m.edges());
+        let x0 = m.x.clone();
+        let x1: Vec<Vec3> = (0..16)
+            .map(|i| match i >= 8 {
+                true => x0[i - 8] + Vec3::new(0.0, 1e-9, 0.0),
+                false => x0[i],
+            })
+            .collect();
+        let end = |seams: &Seams| {
+            let (mut x, mut v) = (x1.clone(), vec![Vec3::ZERO; 16]);
+            run(
+                &m, &settings, &tris, &edges, &pose, seams, &x0, &mut x, &mut v,
+            )
+            .unwrap();
+            x
+        };
+        assert_ne!(end(&Seams::default()), x1, "unsewn: held apart");
+        let seam: Vec<[u32; 2]> = (8..16).map(|i| [i, i - 8]).collect();
+        assert_eq!(end(&Seams::new(16, &tris, &seam)), x1, "sewn: closes");
+    }
 }
