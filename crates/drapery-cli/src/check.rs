@@ -4,7 +4,8 @@
 //! counts, with [`drapery::collision::frame_check::check_frame`]: intersecting cloth triangle
 //! pairs (all cloths of the frame together, so cloth–cloth crossings count too) and, with
 //! `--scene`, cloth vertices inside the scene's analytic colliders and cloth triangles crossing
-//! its mesh colliders, each collider posed at the frame's time `k / frame_rate`.
+//! its mesh colliders, each collider posed at the frame's time `k / frame_rate`; the triangles
+//! of the two sides of a `[[stitch]]` pair meet at the seam and do not count as crossing there.
 //! One line per frame with a problem, then a summary line; exit code 0 when every frame is
 //! clean, 1 when anything intersects (or on an error).
 
@@ -51,6 +52,11 @@ pub fn check(args: CheckArgs) -> Result<bool> {
         .iter()
         .flat_map(|s| s.obstacles.iter().map(|o| o.collider.clone()))
         .collect();
+    // stitched pairs (global indices, the frames' vertex order): a closed seam is not a crossing
+    let stitches: Vec<[u32; 2]> = match &scene {
+        Some(s) => s.model()?.stitches().iter().map(|p| [p.a, p.b]).collect(),
+        None => Vec::new(),
+    };
     let (files, kind) = frame_files(&args.dir)?;
     let frames: Vec<(usize, &PathBuf)> = files.iter().map(|(k, p)| (*k, p)).collect();
     let results: Vec<(usize, FrameCheck)> = frames
@@ -85,6 +91,7 @@ pub fn check(args: CheckArgs) -> Result<bool> {
             let r = check_frame(
                 &mesh.positions,
                 &mesh.triangles(),
+                &stitches,
                 &colliders,
                 t,
                 args.tolerance,

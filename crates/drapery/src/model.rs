@@ -169,6 +169,43 @@ pub struct Model {
     pub(crate) obstacles: Vec<crate::collision::settings::Obstacle>,
     /// Handles of every cloth (global particle indices).
     pub(crate) handles: Vec<crate::constraints::handles::Handle>,
+    /// Stitched particle pairs (see [`Model::with_stitches`]).
+    pub(crate) stitches: Vec<Stitch>,
+}
+
+/// One side of a stitch: a cloth by name and vertices of its mesh, in order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StitchEnd {
+    /// The cloth's name.
+    pub cloth: String,
+    /// Vertex indices into that cloth's mesh.
+    pub vertices: Vec<u32>,
+}
+
+/// A seam: `a.vertices[k]` is sewn to `b.vertices[k]` for every `k` (docs/MATH.md §2.1).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StitchDesc {
+    /// The first side.
+    pub a: StitchEnd,
+    /// The second side (as many vertices as `a`).
+    pub b: StitchEnd,
+    /// Stiffness of each pair's zero-length spring, N/m (> 0).
+    pub stiffness: f64,
+    /// Damping of each pair's relative velocity, N·s/m (≥ 0).
+    pub damping: f64,
+}
+
+/// One stitched pair, in global particle indices.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stitch {
+    /// First particle.
+    pub a: u32,
+    /// Second particle (never `a`).
+    pub b: u32,
+    /// Stiffness, N/m.
+    pub stiffness: f64,
+    /// Damping, N·s/m.
+    pub damping: f64,
 }
 
 /// `values` has one finite entry per particle (`n`).
@@ -220,6 +257,7 @@ impl Model {
             mass: Vec::new(),
             pinned: Vec::new(),
             handles: Vec::new(),
+            stitches: Vec::new(),
             drag: Vec::new(),
             springs: Springs::default(),
             gravity,
@@ -437,6 +475,80 @@ impl Model {
         out
     }
 
+    /// The same model with the stitches `descs` added; errors name the stitch
+    /// (`stitch[1].b.vertices`): an unknown cloth, sides of unequal length or empty, a vertex
+    /// out of its cloth's range, a vertex stitched to itself, a stiffness not > 0 or a damping
+    /// not ≥ 0.
+    pub fn with_stitches(mut self, descs: &[StitchDesc]) -> Result<Model> {
+        for (i, d) in descs.iter().enumerate() {
+            let at = format!("stitch[{i}]");
+            validate::positive(&format!("{at}.stiffness"), d.stiffness)?;
+            validate::nonneg(&format!("{at}.damping"), d.damping)?;
+            let side = |e: &StitchEnd, name: &str| -> Result<Vec<u32>> {
+                let info = self.cloth(&e.cloth).ok_or_else(|| {
+                    let names: Vec<String> = self
+                        .cloths
+                        .iter()
+                        .map(|c| format!("'{}'", c.name))
+                        .collect();
+                    Error::field(
+                        format!("{at}.{name}.cloth"),
+                        format!(
+                            "no cloth named '{}' (the cloths are {})",
+                            e.cloth,
+                            names.join(", ")
+                        ),
+                    )
+                })?;
+                let n = info.mesh.vertex_count();
+                if e.vertices.is_empty() {
+                    return Err(Error::field(
+                        format!("{at}.{name}.vertices"),
+                        "is empty: a stitch needs at least one vertex on each side",
+                    ));
+                }
+                e.vertices
+                    .iter()
+                    .map(|&v| match (v as usize) < n {
+                        true => Ok(v + info.offset as u32),
+                        false => Err(Error::field(
+                            format!("{at}.{name}.vertices"),
+                            format!(
+                                "vertex {v} is out of range (cloth '{}' has {n} vertices)",
+                                e.cloth
+                            ),
+                        )),
+                    })
+                    .collect()
+            };
+            let a = side(&d.a, "a")?;
+            let b = side(&d.b, "b")?;
+            if a.len() != b.len() {
+                return Err(Error::field(
+                    format!("{at}.b.vertices"),
+                    format!("{} vertices, but a has {}", b.len(), a.len()),
+                ));
+            }
+            if let Some(k) = (0..a.len()).find(|&k| a[k] == b[k]) {
+                return Err(Error::field(
+                    format!("{at}.b.vertices"),
+                    format!(
+                        "pair {k} stitches vertex {} of cloth '{}' to itself",
+                        d.a.vertices[k], d.a.cloth
+                    ),
+                ));
+            }
+            self.stitches
+                .extend(a.iter().zip(&b).map(|(&a, &b)| Stitch {
+                    a,
+                    b,
+                    stiffness: d.stiffness,
+                    damping: d.damping,
+                }));
+        }
+        Ok(self)
+    }
+
     /// The same model with collisions on: `settings` (validated) and the obstacles.
     pub fn with_collisions(
         mut self,
@@ -503,6 +615,11 @@ impl Model {
     /// Lumped masses, kg.
     pub fn masses(&self) -> &[f64] {
         &self.mass
+    }
+
+    /// The stitched particle pairs, in the order of the stitches and of their vertices.
+    pub fn stitches(&self) -> &[Stitch] {
+        &self.stitches
     }
 
     /// The handles (moving pins) of every cloth.

@@ -4,12 +4,13 @@
 //! [`check_frame`] takes the cloth positions and triangles of a frame (all cloths together: a
 //! pair of triangles from two cloths is checked like a pair from one) and the colliders, and
 //! counts at the frame's time `t`:
-//! * intersecting cloth triangle pairs not sharing a vertex ([`super::check::count_self_intersections`]);
+//! * intersecting cloth triangle pairs not sharing a vertex, the two vertices of a stitched pair
+//!   counting as one ([`super::check::count_sewn_intersections`]);
 //! * cloth vertices deeper than `tol` inside an analytic collider ([`super::check::count_penetrations`]);
 //! * pairs (cloth triangle, obstacle triangle) that intersect, for each mesh collider posed at `t`
 //!   ([`super::check::count_intersections_between`]).
 
-use super::check::{count_intersections_between, count_penetrations, count_self_intersections};
+use super::check::{count_intersections_between, count_penetrations, count_sewn_intersections};
 use super::colliders::Collider;
 use crate::math::Vec3;
 
@@ -31,17 +32,19 @@ impl FrameCheck {
     }
 }
 
-/// Counts the intersections of one frame at time `t` (see the module docs). `tol` is the depth,
+/// Counts the intersections of one frame at time `t` (see the module docs), with the stitched
+/// particle pairs `stitches`. `tol` is the depth,
 /// in metres, below which a vertex inside an analytic collider is not counted.
 pub fn check_frame(
     x: &[Vec3],
     triangles: &[[u32; 3]],
+    stitches: &[[u32; 2]],
     colliders: &[Collider],
     t: f64,
     tol: f64,
 ) -> FrameCheck {
     let mut r = FrameCheck {
-        self_intersections: count_self_intersections(x, triangles),
+        self_intersections: count_sewn_intersections(x, triangles, stitches),
         penetrations: count_penetrations(x, colliders, t, tol),
         mesh_intersections: 0,
     };
@@ -84,15 +87,15 @@ mod tests {
             radius: 0.1,
         }));
         let cs = [plate, ball];
-        let early = check_frame(&x, &tris, &cs, 0.0, 1e-9);
+        let early = check_frame(&x, &tris, &[], &cs, 0.0, 1e-9);
         assert_eq!(early.mesh_intersections, 0);
         assert!(early.is_clean(), "{early:?}");
-        let late = check_frame(&x, &tris, &cs, 0.5, 1e-9);
+        let late = check_frame(&x, &tris, &[], &cs, 0.5, 1e-9);
         assert!(late.mesh_intersections > 0);
         assert_eq!(late.self_intersections, 0);
         // push a vertex into the sphere
         let mut y = x.clone();
         y[24] = Vec3::new(0.3, 0.25, 0.3);
-        assert_eq!(check_frame(&y, &tris, &cs, 0.0, 1e-9).penetrations, 1);
+        assert_eq!(check_frame(&y, &tris, &[], &cs, 0.0, 1e-9).penetrations, 1);
     }
 }

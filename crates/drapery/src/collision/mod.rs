@@ -10,6 +10,7 @@
 //! * [`proximity`] turns candidates into contact stencils (particle indices and weights);
 //! * [`repulsion`] turns a close pair into forces and a 12×12 Jacobian (docs/MATH.md §4);
 //! * [`friction`] applies Coulomb friction to cloth–cloth contacts after the solve;
+//! * [`seams`] exempts the contact pairs around stitched vertices, so a seam can close;
 //! * [`ccd`] finds the earliest time of impact over a step, so nothing passes through;
 //! * [`colliders`] describes analytic and mesh obstacles with rigid motion;
 //! * [`check`] counts intersecting triangle pairs and penetrating vertices (a test oracle),
@@ -26,5 +27,6 @@ pub mod friction;
 pub mod predicates;
 pub mod proximity;
 pub mod repulsion;
+pub mod seams;
 pub mod settings;
 pub mod tessellate;

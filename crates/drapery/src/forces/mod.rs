@@ -15,12 +15,14 @@ pub mod gravity;
 pub mod repulsion;
 pub mod spring;
 pub mod stencil;
+pub mod stitch;
 
 pub use damping::SpringDamping;
 pub use drag::AirDrag;
 pub use gravity::Gravity;
 pub use repulsion::Repulsions;
 pub use spring::Springs;
+pub use stitch::Stitches;
 
 use crate::linalg::BlockMatrix;
 use crate::math::Vec3;

@@ -41,6 +41,12 @@
 //! friction = 0.5                # optional, overrides [collision].friction
 //! velocity = [0.0, 0.0, 0.0]    # optional, m/s
 //! angular_velocity = [0.0, 3.14, 0.0]  # optional, rad/s about the collider's center
+//!
+//! [[stitch]]                    # zero or more seams, cloth–cloth or within one cloth
+//! a = { cloth = "sheet", vertices = [0, 1, 2] }
+//! b = { cloth = "sheet", vertices = [30, 31, 32] }  # paired one to one, in order
+//! stiffness = 1000.0            # N/m, optional (default shown)
+//! damping = 0.0                 # N·s/m, optional (default shown)
 //! ```
 //!
 //! Collisions are on when the scene has a `[collision]` table or any `[[collider]]` (colliders
@@ -58,13 +64,14 @@ use crate::collision::settings::{CollisionSettings, Obstacle};
 use crate::error::{Error, Result};
 use crate::math::Vec3;
 use crate::mesh::Mesh;
-use crate::model::{ClothDesc, MassSpec, Material, Model};
+use crate::model::{ClothDesc, MassSpec, Material, Model, StitchDesc};
 use crate::step::{LinearSolver, Simulation, SolverSettings};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 mod collider;
 mod handle;
+mod stitch;
 
 /// Relative tolerance for "whole number" checks on steps per frame and frame counts.
 pub const WHOLE_TOLERANCE: f64 = 1e-6;
@@ -97,6 +104,8 @@ pub struct Scene {
     pub collision: Option<CollisionSettings>,
     /// The `[[collider]]`s, in file order.
     pub obstacles: Vec<Obstacle>,
+    /// The `[[stitch]]`es, in file order.
+    pub stitches: Vec<StitchDesc>,
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -113,6 +122,8 @@ struct SceneFile {
     collision: Option<CollisionTable>,
     #[serde(default)]
     collider: Vec<toml::Table>,
+    #[serde(default)]
+    stitch: Vec<toml::Table>,
 }
 
 #[derive(Deserialize)]
@@ -396,6 +407,10 @@ impl Scene {
         }
         collider::unique_names(&obstacles).map_err(located)?;
         handle::resolve_attachments(&mut cloths, &attachments, &obstacles).map_err(located)?;
+        let stitches = (file.stitch.iter().enumerate())
+            .map(|(i, t)| stitch::stitch(i, t, dir))
+            .collect::<Result<Vec<_>>>()
+            .map_err(located)?;
         if collision.is_none() && !obstacles.is_empty() {
             collision = Some(CollisionSettings::default());
         }
@@ -410,6 +425,7 @@ impl Scene {
             cloths,
             collision,
             obstacles,
+            stitches,
         };
         // Whatever the model itself rejects (cloth names, materials, pins, density on vertices
         // that belong to no face) is reported now, before anything is simulated or written.
@@ -446,7 +462,7 @@ impl Scene {
 
     /// The model, with the model's own errors.
     fn unchecked_model(&self) -> Result<Model> {
-        let mut m = Model::new(self.cloths.clone(), self.gravity)?;
+        let mut m = Model::new(self.cloths.clone(), self.gravity)?.with_stitches(&self.stitches)?;
         m.collision = self.collision;
         m.obstacles = self.obstacles.clone();
         Ok(m)

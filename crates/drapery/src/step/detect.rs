@@ -2,13 +2,15 @@
 //!
 //! * obstacle contacts: candidates of the active set ([`crate::constraints::obstacle::find`]);
 //! * cloth–cloth contacts: vertex–triangle and edge–edge pairs closer than the thickness become
-//!   repulsion stencils ([`Repulsions`]) whose Jacobians enter the system matrix.
+//!   repulsion stencils ([`Repulsions`]) whose Jacobians enter the system matrix, except those
+//!   within a stitched neighbourhood ([`Seams`]), which must be free to close.
 
 use super::guard::Start;
 use super::pose::Pose;
 use crate::collision::broad_phase::candidates;
 use crate::collision::proximity::proximities;
 use crate::collision::repulsion::Penalty;
+use crate::collision::seams::Seams;
 use crate::constraints::obstacle::{self, ObstacleContact};
 use crate::forces::Repulsions;
 use crate::model::Model;
@@ -29,6 +31,7 @@ pub(crate) fn contacts(
     edges: &[[u32; 2]],
     start: &Start,
     pose: &Pose,
+    seams: &Seams,
 ) -> Contacts {
     let Some(c) = &model.collision else {
         return Contacts::default();
@@ -47,7 +50,9 @@ pub(crate) fn contacts(
     let repulsions = if c.self_collision {
         let cand = candidates(x0, x0, triangles, edges, c.thickness);
         let mut stencils = proximities(x0, triangles, edges, &cand, c.thickness);
-        stencils.retain(|s| s.particles.iter().any(|&p| !pose.pinned[p as usize]));
+        stencils.retain(|s| {
+            s.particles.iter().any(|&p| !pose.pinned[p as usize]) && !seams.exempt(&s.particles)
+        });
         (!stencils.is_empty()).then(|| {
             Repulsions::new(
                 stencils,
@@ -88,7 +93,7 @@ mod tests {
         }
         let (tris, edges) = (m.triangles(), m.edges());
         let pose = pose::at(&m, 0.0, h);
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose);
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &Seams::default());
         assert!(
             !c.obstacle.is_empty(),
             "particles 2 mm above the ground touch it"
@@ -100,12 +105,41 @@ mod tests {
         // pin every particle: no stencil and no obstacle contact is left
         m.pinned = vec![true; m.particle_count()];
         let pose = pose::at(&m, 0.0, h);
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose);
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &Seams::default());
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
         // collisions off: nothing
         m.collision = None;
         m.pinned = vec![false; m.particle_count()];
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose);
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &Seams::default());
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
+    }
+
+    /// The folded sheet again, its halves stitched vertex to vertex: every close pair lies in a
+    /// stitched neighbourhood and gets no repulsion; one stitch leaves the others' pairs.
+    #[test]
+    fn pairs_within_a_stitched_neighbourhood_get_no_repulsion() {
+        let mut m = testing::sheet_on_ground(4, 0.5);
+        for i in 8..16 {
+            m.x[i] = m.x[i - 8] + Vec3::new(0.0, 0.002, 0.0);
+        }
+        let start = Start {
+            x0: m.x.clone(),
+            v0: vec![Vec3::ZERO; m.particle_count()],
+            ke0: 0.0,
+        };
+        let (tris, edges) = (m.triangles(), m.edges());
+        let pose = pose::at(&m, 0.0, 0.01);
+        let n = m.particle_count();
+        let count = |seams: &Seams| {
+            contacts(&m, &tris, &edges, &start, &pose, seams)
+                .repulsions
+                .map_or(0, |r| r.stencils.len())
+        };
+        let all: Vec<[u32; 2]> = (8..16).map(|i| [i, i - 8]).collect();
+        let unsewn = count(&Seams::default());
+        assert!(unsewn > 0);
+        assert_eq!(count(&Seams::new(n, &tris, &all)), 0);
+        let one = count(&Seams::new(n, &tris, &all[..1]));
+        assert!(0 < one && one < unsewn, "{one} of {unsewn}");
     }
 }

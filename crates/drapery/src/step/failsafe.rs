@@ -5,6 +5,7 @@
 
 use super::pose::Pose;
 use crate::collision::failsafe::failsafe;
+use crate::collision::seams::Seams;
 use crate::collision::settings::CollisionSettings;
 use crate::math::Vec3;
 use crate::model::Model;
@@ -18,6 +19,7 @@ pub(crate) fn run(
     triangles: &[[u32; 3]],
     edges: &[[u32; 2]],
     pose: &Pose,
+    seams: &Seams,
     x0: &[Vec3],
     x: &mut [Vec3],
     v: &mut [Vec3],
@@ -35,6 +37,7 @@ pub(crate) fn run(
         h,
         settings.thickness,
         settings.self_collision,
+        seams,
     )?;
     let mut keep_velocity = vec![false; x.len()];
     r.projected
@@ -72,11 +75,53 @@ mod tests {
         v[0] = Vec3::new(0.0, -10.0, 0.0);
         let mut x: Vec<Vec3> = x0.iter().zip(&v).map(|(p, u)| *p + h * *u).collect();
         let moved_before = x.clone();
-        run(&m, &settings, &[], &[], &pose, &x0, &mut x, &mut v).unwrap();
+        run(
+            &m,
+            &settings,
+            &[],
+            &[],
+            &pose,
+            &Seams::default(),
+            &x0,
+            &mut x,
+            &mut v,
+        )
+        .unwrap();
         assert!(x[0].y >= 0.0 && x[0].y < x0[0].y, "{}", x[0]);
         assert_eq!(v[0], (x[0] - x0[0]) / h);
         // the others were not touched
         assert_eq!(&x[1..], &moved_before[1..]);
         assert!(v[1..].iter().all(|u| *u == Vec3::new(0.0, -1.0, 0.0)));
+    }
+
+    /// Two stacked rows pushed onto each other over a step: the fail-safe holds them apart,
+    /// unless they are stitched vertex to vertex (a seam closing).
+    #[test]
+    fn a_stitched_pair_may_close_through_the_failsafe() {
+        let mut m = testing::sheet_on_ground(4, 0.5);
+        for i in 8..16 {
+            m.x[i] = m.x[i - 8] + Vec3::new(0.0, 0.002, 0.0);
+        }
+        let settings = m.collision.unwrap();
+        let pose = crate::step::pose::at(&m, 0.0, 0.01);
+        let (tris, edges) = (m.triangles(), m.edges());
+        let x0 = m.x.clone();
+        let x1: Vec<Vec3> = (0..16)
+            .map(|i| match i >= 8 {
+                true => x0[i - 8] + Vec3::new(0.0, 1e-9, 0.0),
+                false => x0[i],
+            })
+            .collect();
+        let end = |seams: &Seams| {
+            let (mut x, mut v) = (x1.clone(), vec![Vec3::ZERO; 16]);
+            run(
+                &m, &settings, &tris, &edges, &pose, seams, &x0, &mut x, &mut v,
+            )
+            .unwrap();
+            x
+        };
+        assert_ne!(end(&Seams::default()), x1, "unsewn: held apart");
+        let seam: Vec<[u32; 2]> = (8..16).map(|i| [i, i - 8]).collect();
+        assert_eq!(end(&Seams::new(16, &tris, &seam)), x1, "sewn: closes");
     }
 }

@@ -38,9 +38,12 @@ mod testing;
 pub use report::{StageTimes, StepReport};
 pub use settings::{LinearSolver, SolverSettings};
 
+use crate::collision::seams::Seams;
 use crate::constraints::obstacle::ActiveSet;
 use crate::error::Result;
-use crate::forces::{AirDrag, Force, Gravity, Linearization, SpringDamping, Springs, State};
+use crate::forces::{
+    AirDrag, Force, Gravity, Linearization, SpringDamping, Springs, State, Stitches,
+};
 use crate::linalg::BlockMatrix;
 use crate::linalg::pcg::Preconditioner;
 use crate::math::Vec3;
@@ -71,6 +74,8 @@ pub struct Simulation {
     initial: (Vec<Vec3>, Vec<Vec3>),
     triangles: Vec<[u32; 3]>,
     edges: Vec<[u32; 2]>,
+    /// The stitched neighbourhoods exempt from cloth–cloth contact.
+    seams: Seams,
     work: Work,
     solvers: Solvers,
 }
@@ -100,6 +105,8 @@ impl Simulation {
         let system = System::new(n, &forces);
         let (triangles, edges) = (model.triangles(), model.edges());
         let initial = (model.x.clone(), model.v.clone());
+        let stitched: Vec<[u32; 2]> = model.stitches.iter().map(|p| [p.a, p.b]).collect();
+        let seams = Seams::new(n, &triangles, &stitched);
         Ok(Simulation {
             warm_start: vec![Vec3::ZERO; n],
             model,
@@ -111,6 +118,7 @@ impl Simulation {
             initial,
             triangles,
             edges,
+            seams,
             work: Work::default(),
             solvers: Solvers::default(),
         })
@@ -143,7 +151,14 @@ impl Simulation {
             pose::at(&self.model, self.time, h)
         });
         let contacts = timed(&mut report.stages.detect, || {
-            let c = detect::contacts(&self.model, &self.triangles, &self.edges, &start, &pose);
+            let c = detect::contacts(
+                &self.model,
+                &self.triangles,
+                &self.edges,
+                &start,
+                &pose,
+                &self.seams,
+            );
             self.system.use_contacts(c.repulsions.as_ref());
             c
         });
@@ -247,6 +262,7 @@ impl Simulation {
                     &self.triangles,
                     &self.edges,
                     &pose,
+                    &self.seams,
                     &start.x0,
                     &mut x,
                     &mut v,
@@ -480,7 +496,7 @@ impl Simulation {
 }
 
 /// The forces of a model: gravity, then springs and spring damping (the springs with a
-/// nonzero coefficient), then air drag if any particle has it.
+/// nonzero coefficient), then the stitches if any, then air drag if any particle has it.
 fn model_forces(model: &Model, settings: &SolverSettings) -> Vec<Box<dyn Force>> {
     let s = &model.springs;
     let stiff: Vec<usize> = (0..s.len()).filter(|&k| s.stiffness[k] > 0.0).collect();
@@ -502,6 +518,16 @@ fn model_forces(model: &Model, settings: &SolverSettings) -> Vec<Box<dyn Force>>
             j: damped.iter().map(|&k| s.j[k]).collect(),
             c: damped.iter().map(|&k| s.damping[k]).collect(),
             position_jacobian: settings.damping_x_jacobian,
+            sums: Default::default(),
+        }));
+    }
+    if !model.stitches.is_empty() {
+        let st = &model.stitches;
+        forces.push(Box::new(Stitches {
+            a: st.iter().map(|p| p.a).collect(),
+            b: st.iter().map(|p| p.b).collect(),
+            k: st.iter().map(|p| p.stiffness).collect(),
+            c: st.iter().map(|p| p.damping).collect(),
             sums: Default::default(),
         }));
     }
