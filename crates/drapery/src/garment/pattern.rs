@@ -676,7 +676,7 @@ fn segments_touch(a: Point2, b: Point2, c: Point2, d: Point2) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A specification with the given panels (JSON object body) and stitches (JSON list body).

@@ -203,21 +203,39 @@ impl Pattern {
         if cdt.num_vertices() != flat.len() {
             return Err(fail("triangulation merged coincident points".into()));
         }
-        let mut faces = Vec::new();
+        // inside = an odd number of outline crossings from the outer face (flood fill)
+        let mut odd: Vec<Option<bool>> = vec![None; cdt.num_all_faces()];
+        let mut queue = std::collections::VecDeque::new();
         for f in cdt.inner_faces() {
-            let [a, b, c] = f.vertices().map(|v| v.fix().index() as u32);
-            let (pa, pb, pc) = (flat[a as usize], flat[b as usize], flat[c as usize]);
-            let centroid = [(pa[0] + pb[0] + pc[0]) / 3.0, (pa[1] + pb[1] + pc[1]) / 3.0];
-            if !inside(ring, centroid) {
+            for e in f.adjacent_edges() {
+                if e.rev().face().is_outer() && odd[f.fix().index()].is_none() {
+                    odd[f.fix().index()] = Some(e.is_constraint_edge());
+                    queue.push_back(f);
+                }
+            }
+        }
+        while let Some(f) = queue.pop_front() {
+            let here = odd[f.fix().index()] == Some(true);
+            for e in f.adjacent_edges() {
+                if let Some(g) = e.rev().face().as_inner()
+                    && odd[g.fix().index()].is_none()
+                {
+                    odd[g.fix().index()] = Some(here != e.is_constraint_edge());
+                    queue.push_back(g);
+                }
+            }
+        }
+        let mut tris = Vec::new();
+        for f in cdt.inner_faces() {
+            if odd[f.fix().index()] != Some(true) {
                 continue;
             }
-            let tri_ccw = orient(pa, pb, pc) > 0.0;
-            faces.push(Face::Tri(if tri_ccw == ccw {
-                [a, b, c]
-            } else {
-                [a, c, b]
-            }));
+            let [a, b, c] = f.vertices().map(|v| v.fix().index() as u32);
+            // spade's inner faces wind counter-clockwise; follow the outline's winding
+            tris.push(if ccw { [a, b, c] } else { [a, c, b] });
         }
+        flip_slivers(&flat, &mut tris, h);
+        let mut faces: Vec<Face> = tris.into_iter().map(Face::Tri).collect();
         // deterministic order: by sorted vertex triple
         faces.sort_by_key(|f| {
             let mut k = [0u32; 3];
@@ -248,6 +266,41 @@ impl Pattern {
             flat,
             edges,
         })
+    }
+}
+
+/// Replaces each sliver triangle `(p, q, r)` (a middle vertex `q` all but on its longest edge
+/// `r–p`, as rounding leaves along a straight outline edge) and its neighbour `(p, r, x)`
+/// across that edge by `(p, q, x)` and `(q, r, x)`. Triangles keep their common winding.
+fn flip_slivers(flat: &[Point2], tris: &mut [[u32; 3]], h: f64) {
+    let tiny = 1e-8 * h * h;
+    let area2 = |t: [u32; 3]| {
+        orient(
+            flat[t[0] as usize],
+            flat[t[1] as usize],
+            flat[t[2] as usize],
+        )
+        .abs()
+    };
+    for _ in 0..tris.len() {
+        let Some(s) = (0..tris.len()).find(|&i| area2(tris[i]) < tiny) else {
+            return;
+        };
+        // rotate the sliver so that its longest edge is r → p
+        let t = tris[s];
+        let len = |k: usize| dist(flat[t[k] as usize], flat[t[(k + 1) % 3] as usize]);
+        let k = (0..3).max_by(|&a, &b| len(a).total_cmp(&len(b))).unwrap(); // edge t[k] → t[k+1]
+        let (r, p, q) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+        let neighbour = (0..tris.len())
+            .find(|&i| i != s && (0..3).any(|j| tris[i][j] == p && tris[i][(j + 1) % 3] == r));
+        let Some(n) = neighbour else { return };
+        let x = *tris[n].iter().find(|&&v| v != p && v != r).unwrap();
+        let (a, b) = ([p, q, x], [q, r, x]);
+        if area2(a) < tiny || area2(b) < tiny {
+            return; // nothing better to flip to
+        }
+        tris[s] = a;
+        tris[n] = b;
     }
 }
 
@@ -335,5 +388,367 @@ impl SegmentGrid {
             }
         }
         true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::garment::pattern::Curve;
+    use crate::garment::pattern::tests::{spec, square};
+    use std::collections::HashMap;
+    use std::f64::consts::PI;
+
+    fn examples() -> std::path::PathBuf {
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/garments")
+    }
+
+    /// Area inside a panel's exact outline (m²), by Green's theorem on a fine uniform sampling
+    /// in each curve's own parameter.
+    fn exact_area(p: &Pattern, panel: &Panel) -> f64 {
+        let ring = panel.sampled_outline(20_000);
+        let s = 1.0 / p.units_in_meter;
+        let n = ring.len();
+        let twice: f64 = (0..n)
+            .map(|i| {
+                let (a, b) = (ring[i], ring[(i + 1) % n]);
+                a[0] * b[1] - a[1] * b[0]
+            })
+            .sum();
+        (0.5 * twice * s * s).abs()
+    }
+
+    fn flat_area(m: &PanelMesh) -> f64 {
+        m.mesh
+            .triangles()
+            .iter()
+            .map(|t| {
+                0.5 * orient(
+                    m.flat[t[0] as usize],
+                    m.flat[t[1] as usize],
+                    m.flat[t[2] as usize],
+                )
+                .abs()
+            })
+            .sum()
+    }
+
+    fn mesh_area(m: &PanelMesh) -> f64 {
+        let x = &m.mesh.positions;
+        m.mesh
+            .triangles()
+            .iter()
+            .map(|t| {
+                0.5 * (x[t[1] as usize] - x[t[0] as usize])
+                    .cross(x[t[2] as usize] - x[t[0] as usize])
+                    .length()
+            })
+            .sum()
+    }
+
+    fn assert_area(p: &Pattern, g: &Garment, expected: Option<&[f64]>) {
+        for (k, (panel, m)) in p.panels.iter().zip(&g.panels).enumerate() {
+            let exact = exact_area(p, panel);
+            if let Some(e) = expected {
+                assert!(
+                    (exact - e[k]).abs() < 1e-6 * e[k],
+                    "{}: Green {exact} vs analytic {}",
+                    panel.name,
+                    e[k]
+                );
+            }
+            for got in [flat_area(m), mesh_area(m)] {
+                assert!(
+                    (got - exact).abs() < 0.005 * exact,
+                    "{}: triangulated {got} m² vs outline {exact} m²",
+                    panel.name
+                );
+            }
+        }
+    }
+
+    /// Every triangle has positive area with the outline's winding; every mesh edge borders two
+    /// triangles in opposite directions except the outline's segments, which border one.
+    fn assert_well_formed(m: &PanelMesh) {
+        let n = m.edges.iter().map(|e| e.len() - 1).sum::<usize>();
+        let ring: Vec<Point2> = (0..n).map(|i| m.flat[i]).collect();
+        let sign = (0..n)
+            .map(|i| orient([0.0, 0.0], ring[i], ring[(i + 1) % n]))
+            .sum::<f64>()
+            .signum();
+        let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
+        for t in m.mesh.triangles() {
+            let a = orient(
+                m.flat[t[0] as usize],
+                m.flat[t[1] as usize],
+                m.flat[t[2] as usize],
+            );
+            assert!(
+                a * sign > 0.0,
+                "{}: triangle {t:?} has signed area {a}",
+                m.name
+            );
+            for k in 0..3 {
+                *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+            }
+        }
+        let mut boundary = Vec::new();
+        for (&(a, b), &c) in &directed {
+            assert_eq!(c, 1, "{}: directed edge {a}->{b} used {c} times", m.name);
+            if !directed.contains_key(&(b, a)) {
+                boundary.push((a, b));
+            }
+        }
+        boundary.sort();
+        let mut outline: Vec<(u32, u32)> = m
+            .edges
+            .iter()
+            .flat_map(|e| e.windows(2).map(|w| (w[0], w[1])))
+            .collect();
+        outline.sort();
+        assert_eq!(
+            boundary, outline,
+            "{}: the mesh boundary is not the outline",
+            m.name
+        );
+        m.mesh.validate(&m.name).unwrap();
+    }
+
+    /// Distance from `q` to the exact curve (pattern units).
+    fn distance_to_curve(c: &Curve, q: Point2) -> f64 {
+        dist(c.point(closest_parameter(c, q)), q)
+    }
+
+    /// Arc length of the exact curve from its start to parameter `t` (fine polyline).
+    fn arc_length_to(c: &Curve, t: f64) -> f64 {
+        let n = 20_000;
+        (0..n)
+            .map(|i| {
+                dist(
+                    c.point(t * i as f64 / n as f64),
+                    c.point(t * (i + 1) as f64 / n as f64),
+                )
+            })
+            .sum()
+    }
+
+    /// Parameter of the point of the curve closest to `q`: nearest of a fine sampling, then
+    /// refined by golden-section search around it.
+    fn closest_parameter(c: &Curve, q: Point2) -> f64 {
+        let n = 4000;
+        let d = |t: f64| dist(c.point(t), q);
+        let i = (0..=n)
+            .min_by(|&a, &b| d(a as f64 / n as f64).total_cmp(&d(b as f64 / n as f64)))
+            .unwrap();
+        let (mut lo, mut hi) = (
+            ((i as f64) - 1.0).max(0.0) / n as f64,
+            ((i as f64) + 1.0).min(n as f64) / n as f64,
+        );
+        let g = (5f64.sqrt() - 1.0) / 2.0;
+        for _ in 0..200 {
+            let (a, b) = (hi - g * (hi - lo), lo + g * (hi - lo));
+            if d(a) < d(b) { hi = b } else { lo = a }
+        }
+        0.5 * (lo + hi)
+    }
+
+    fn assert_on_curves(p: &Pattern, g: &Garment) {
+        for (panel, m) in p.panels.iter().zip(&g.panels) {
+            for (e, verts) in panel.edges.iter().zip(&m.edges) {
+                for &v in verts {
+                    let q = m.flat[v as usize].map(|x| x * p.units_in_meter);
+                    let off = distance_to_curve(&e.curve, q) / p.units_in_meter;
+                    assert!(off < 1e-9, "{}: vertex {v} is {off} m off its edge", m.name);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn example_garments_load_triangulate_and_sew_edge_to_edge() {
+        for (file, panels, gap, h) in [
+            ("skirt_specification.json", 2, [0.0, 0.0, 0.30], 0.02),
+            ("skirt_specification.json", 2, [0.0, 0.0, 0.30], 0.0125),
+            ("top_specification.json", 4, [0.0; 3], 0.02),
+            ("top_specification.json", 4, [0.0; 3], 0.03),
+        ] {
+            let p = Pattern::load(examples().join(file)).unwrap();
+            assert_eq!(p.panels.len(), panels);
+            let g = p.triangulate(h).unwrap();
+            assert_area(&p, &g, None);
+            assert_on_curves(&p, &g);
+            g.panels.iter().for_each(assert_well_formed);
+            assert_eq!(g.stitches.len(), p.stitches.len());
+            for (s, spec) in g.stitches.iter().zip(&p.stitches) {
+                let [a, b] = spec.sides;
+                assert_eq!(
+                    g.panels[a.panel].edges[a.edge].len(),
+                    g.panels[b.panel].edges[b.edge].len()
+                );
+                assert_eq!(s.pairs.len(), g.panels[a.panel].edges[a.edge].len());
+                // the example panels are placed so that the seams meet (the skirt's front and
+                // back 30 cm apart in z): paired vertices coincide up to that gap
+                for &[u, v] in &s.pairs {
+                    let d = g.panels[s.panels[0]].mesh.positions[u as usize]
+                        - g.panels[s.panels[1]].mesh.positions[v as usize];
+                    let d = [d.x.abs(), d.y.abs(), d.z.abs()];
+                    assert!(
+                        (0..3).all(|k| (d[k] - gap[k]).abs() < 1e-9),
+                        "{file}: stitched pair {u}, {v} apart by {d:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn curved_panels_have_their_analytic_area() {
+        let r = 20.0; // cm
+        let half_disk = format!(
+            r#""half": {{"vertices": [[-{r}, 0], [{r}, 0]], "edges": [
+            {{"endpoints": [0, 1], "curvature": {{"type": "circle", "params": [{r}, 0, 0]}}}},
+            {{"endpoints": [1, 0]}}]}}"#
+        );
+        // chord 24, radius 20, large arc: angle 2π − 2·asin(0.6)
+        let big = r#""big": {"vertices": [[-12, 0], [12, 0]], "edges": [{"endpoints": [0, 1]},
+            {"endpoints": [1, 0], "curvature": {"type": "circle", "params": [20, 1, 1]}}]}"#;
+        // a 30 cm square whose bottom edge bulges out by a parabola of relative height 0.2:
+        // area 900 + 0.2·30²/3 (the parabolic segment is 2/3 of its bounding rectangle)
+        let bulge = r#""bulge": {"vertices": [[0, 0], [30, 0], [30, 30], [0, 30]], "edges": [
+            {"endpoints": [0, 1], "curvature": {"type": "quadratic", "params": [[0.5, -0.2]]}},
+            {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}]}"#;
+        // a cubic dent with control points at (1/3, 0.3) and (2/3, 0.3) on the top edge (running
+        // in −x, so its left is −y): x is linear in t, the depth 0.3·L·3t(1−t), the area lost
+        // 0.3·L²/2
+        let cubic = r#""cubic": {"vertices": [[0, 0], [30, 0], [30, 30], [0, 30]], "edges": [
+            {"endpoints": [0, 1]}, {"endpoints": [1, 2]},
+            {"endpoints": [2, 3], "curvature": {"type": "cubic", "params": [[0.3333333333333333, 0.3], [0.6666666666666666, 0.3]]}},
+            {"endpoints": [3, 0]}]}"#;
+        let text = spec(&format!("{half_disk}, {big}, {bulge}, {cubic}"), "");
+        let p = Pattern::parse(&text, "curves.json").unwrap();
+        let theta = 2.0 * PI - 2.0 * 0.6f64.asin();
+        let by_name = |n: &str| match n {
+            "half" => PI * r * r / 2.0,
+            "big" => 400.0 * (theta - theta.sin()) / 2.0,
+            "bulge" => 900.0 + 0.2 * 900.0 / 3.0,
+            "cubic" => 900.0 - 0.3 * 900.0 / 2.0,
+            _ => unreachable!(),
+        } * 1e-4;
+        let expected: Vec<f64> = p.panels.iter().map(|q| by_name(&q.name)).collect();
+        for h in [0.02, 0.01] {
+            let g = p.triangulate(h).unwrap();
+            assert_area(&p, &g, Some(&expected));
+            assert_on_curves(&p, &g);
+            g.panels.iter().for_each(assert_well_formed);
+        }
+    }
+
+    #[test]
+    fn stitches_pair_edges_by_arc_length_in_garmentcode_orientation() {
+        // a 20 cm square and a 20 cm panel whose stitched edge is a longer curve
+        let curvy = r#""curvy": {"vertices": [[0, 0], [20, 0], [20, 20], [0, 20]], "edges": [
+            {"endpoints": [0, 1]}, {"endpoints": [1, 2], "curvature": {"type": "cubic", "params": [[0.1, -0.6], [0.6, 0.4]]}},
+            {"endpoints": [2, 3]}, {"endpoints": [3, 0]}]}"#;
+        let sq = square("sq", 20.0);
+        for right_wrong in [false, true] {
+            let tail = if right_wrong {
+                r#", "right_wrong""#
+            } else {
+                ""
+            };
+            let text = spec(
+                &format!("{sq}, {curvy}"),
+                &format!(
+                    r#"[{{"panel": "sq", "edge": 0}}, {{"panel": "curvy", "edge": 1}}{tail}]"#
+                ),
+            );
+            let p = Pattern::parse(&text, "pair.json").unwrap();
+            let g = p.triangulate(0.03).unwrap();
+            let (sq_m, cu_m) = (&g.panels[1], &g.panels[0]);
+            assert_eq!((sq_m.name.as_str(), cu_m.name.as_str()), ("sq", "curvy"));
+            let (ea, eb) = (&sq_m.edges[0], &cu_m.edges[1]);
+            // both get the count of the longer (curved) edge
+            let longer = (p.panels[0].edges[1].curve.length() / 100.0 / 0.03).round() as usize + 1;
+            assert_eq!((ea.len(), eb.len()), (longer, longer));
+            let s = &g.stitches[0];
+            assert_eq!(s.panels, [1, 0]);
+            // default: the first edge runs backwards (its end meets the second's start)
+            let first = if right_wrong {
+                ea[0]
+            } else {
+                *ea.last().unwrap()
+            };
+            assert_eq!(s.pairs[0], [first, eb[0]]);
+            // pairs sit at equal fractions of the exact arc length along the two edges, each
+            // taken in its stitching direction
+            let fraction = |m: &PanelMesh, c: &Curve, v: u32, backwards: bool| {
+                let q = m.flat[v as usize].map(|x| x * 100.0);
+                let f = arc_length_to(c, closest_parameter(c, q)) / arc_length_to(c, 1.0);
+                if backwards { 1.0 - f } else { f }
+            };
+            let (ca, cb) = (&p.panels[1].edges[0].curve, &p.panels[0].edges[1].curve);
+            for (k, &[u, v]) in s.pairs.iter().enumerate() {
+                let (x, y) = (
+                    fraction(sq_m, ca, u, !right_wrong),
+                    fraction(cu_m, cb, v, false),
+                );
+                assert!(
+                    (x - y).abs() < 1e-4
+                        && (x - k as f64 / (s.pairs.len() - 1) as f64).abs() < 1e-4,
+                    "pair {k}: at {x} of one edge, {y} of the other"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_sliver_along_a_straight_edge_is_flipped_into_two_sound_triangles() {
+        // q lies 1e-15 off the chord p–r (rounding along a straight outline edge)
+        let flat = [[0.0, 0.0], [1.0, -1e-15], [2.0, 0.0], [1.0, 1.0]];
+        let mut tris = [[0, 1, 2], [0, 2, 3]];
+        let area = |t: [u32; 3]| {
+            0.5 * orient(
+                flat[t[0] as usize],
+                flat[t[1] as usize],
+                flat[t[2] as usize],
+            )
+        };
+        let before: f64 = tris.iter().map(|&t| area(t)).sum();
+        flip_slivers(&flat, &mut tris, 1.0);
+        assert!(tris.iter().all(|&t| area(t) > 0.4), "{tris:?}");
+        assert!((tris.iter().map(|&t| area(t)).sum::<f64>() - before).abs() < 1e-12);
+        // the outer boundary p → q → r → x → p is kept
+        let mut edges: Vec<(u32, u32)> = tris
+            .iter()
+            .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+            .collect();
+        let all = edges.clone();
+        edges.retain(|&(a, b)| !all.contains(&(b, a)));
+        edges.sort();
+        assert_eq!(edges, [(0, 1), (1, 2), (2, 3), (3, 0)]);
+    }
+
+    #[test]
+    fn an_edge_stitched_twice_and_a_bad_edge_length_are_errors() {
+        let two = format!("{}, {}", square("a", 10.0), square("b", 10.0));
+        let text = spec(
+            &two,
+            r#"[{"panel": "a", "edge": 1}, {"panel": "b", "edge": 3}], [{"panel": "a", "edge": 1}, {"panel": "b", "edge": 2}]"#,
+        );
+        let e = Pattern::parse(&text, "twice.json")
+            .unwrap()
+            .triangulate(0.01)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("twice.json") && e.contains("stitch 1") && e.contains("panel `a`"),
+            "{e}"
+        );
+        let e = Pattern::parse(&text, "twice.json")
+            .unwrap()
+            .triangulate(0.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("twice.json") && e.contains("edge_length"), "{e}");
     }
 }
