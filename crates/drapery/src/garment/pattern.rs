@@ -18,6 +18,9 @@
 //!   quadratic) are relative to the edge: `start + x·(end − start) + y·perp`, where
 //!   `perp = (−(end − start).y, (end − start).x)` is the edge vector turned a quarter left.
 //!   With `properties.curvature_coords = "absolute"` they are panel coordinates instead.
+//! - With `properties.normalize_panel_translation = true` (old data), each panel's vertices are
+//!   moved so that their mean is the origin and that mean is added to the translation's x and y
+//!   (unrotated, as pygarment does).
 //! - A `circle` edge has `params = [radius, large_arc, right]`: an SVG-style arc from start to
 //!   end (radius in pattern units, raised to half the chord if smaller) that turns
 //!   counter-clockwise (increasing angle, y up) when `right` is 1, so a small arc bulges to
@@ -294,6 +297,10 @@ impl Pattern {
             .and_then(|p| p.get("curvature_coords"))
             .and_then(Value::as_str)
             == Some("absolute");
+        let center = props
+            .and_then(|p| p.get("normalize_panel_translation"))
+            .and_then(Value::as_bool)
+            == Some(true);
 
         // panel order: pattern.panel_order when it names exactly the panels, else by name
         let mut names: Vec<&String> = panels_json.keys().collect();
@@ -312,7 +319,13 @@ impl Pattern {
         }
         let mut panels = Vec::with_capacity(names.len());
         for name in names {
-            panels.push(parse_panel(name, &panels_json[name], absolute, origin)?);
+            panels.push(parse_panel(
+                name,
+                &panels_json[name],
+                absolute,
+                center,
+                origin,
+            )?);
         }
 
         let mut stitches = Vec::new();
@@ -377,7 +390,7 @@ fn vec3(v: Option<&Value>) -> Option<[f64; 3]> {
     Some([num(a.first())?, num(a.get(1))?, num(a.get(2))?])
 }
 
-fn parse_panel(name: &str, v: &Value, absolute: bool, origin: &str) -> Result<Panel> {
+fn parse_panel(name: &str, v: &Value, absolute: bool, center: bool, origin: &str) -> Result<Panel> {
     let bad = |m: String| Error::input(origin, format!("panel `{name}`: {m}"));
     let vertices: Vec<Point2> = v
         .get("vertices")
@@ -387,10 +400,21 @@ fn parse_panel(name: &str, v: &Value, absolute: bool, origin: &str) -> Result<Pa
         .enumerate()
         .map(|(i, p)| point(p).ok_or_else(|| bad(format!("vertices[{i}] must be [x, y], got {p}"))))
         .collect::<Result<_>>()?;
-    let translation = match v.get("translation") {
+    let mut translation = match v.get("translation") {
         None => [0.0; 3],
         t => vec3(t).ok_or_else(|| bad("`translation` must be [x, y, z]".into()))?,
     };
+    let mut vertices = vertices;
+    let mut offset = [0.0; 2];
+    if center && !vertices.is_empty() {
+        for k in 0..2 {
+            offset[k] = vertices.iter().map(|p| p[k]).sum::<f64>() / vertices.len() as f64;
+            vertices.iter_mut().for_each(|p| p[k] -= offset[k]);
+            translation[k] += offset[k];
+        }
+    }
+    // absolute control points are in the file's coordinates, before any centring
+    let absolute = absolute.then_some(offset);
     let rotation = match v.get("rotation") {
         None => [0.0; 3],
         r => vec3(r).ok_or_else(|| bad("`rotation` must be [x, y, z] (degrees)".into()))?,
@@ -451,10 +475,11 @@ fn parse_panel(name: &str, v: &Value, absolute: bool, origin: &str) -> Result<Pa
     })
 }
 
-/// A control point given relative to the edge `a → b` (or absolute) in panel coordinates.
-fn control(a: Point2, b: Point2, p: Point2, absolute: bool) -> Point2 {
-    if absolute {
-        return p;
+/// A control point given relative to the edge `a → b` (or, with `absolute = Some(offset)`, in
+/// the file's panel coordinates, from which `offset` is subtracted) in panel coordinates.
+fn control(a: Point2, b: Point2, p: Point2, absolute: Option<Point2>) -> Point2 {
+    if let Some(o) = absolute {
+        return [p[0] - o[0], p[1] - o[1]];
     }
     let e = [b[0] - a[0], b[1] - a[1]];
     [
@@ -467,7 +492,7 @@ fn parse_curve(
     a: Point2,
     b: Point2,
     c: Option<&Value>,
-    absolute: bool,
+    absolute: Option<Point2>,
 ) -> std::result::Result<Curve, String> {
     let Some(c) = c.filter(|c| !c.is_null()) else {
         return Ok(Curve::Line { start: a, end: b });
@@ -708,7 +733,7 @@ pub(crate) mod tests {
             [0.0, 0.0],
             [2.0, 0.0],
             Some(&serde_json::json!({"type": "quadratic", "params": [[0.5, 0.25]]})),
-            false,
+            None,
         )
         .unwrap();
         assert_eq!(
@@ -722,7 +747,7 @@ pub(crate) mod tests {
             [0.0, 0.0],
             [0.0, 2.0],
             Some(&serde_json::json!([0.5, 0.25])),
-            false,
+            None,
         )
         .unwrap();
         assert!(close(c.point(0.5), [-0.25, 1.0]), "{:?}", c.point(0.5));
@@ -731,7 +756,7 @@ pub(crate) mod tests {
             [0.0, 0.0],
             [4.0, 0.0],
             Some(&serde_json::json!({"type": "cubic", "params": [[0.25, 0.5], [0.75, 0.5]]})),
-            false,
+            None,
         )
         .unwrap();
         assert!(close(c.point(0.5), [2.0, 1.5]), "{:?}", c.point(0.5));
@@ -740,7 +765,7 @@ pub(crate) mod tests {
             [0.0, 0.0],
             [2.0, 0.0],
             Some(&serde_json::json!([1.0, 3.0])),
-            true,
+            Some([0.0, 0.0]),
         )
         .unwrap();
         assert_eq!(
@@ -758,7 +783,7 @@ pub(crate) mod tests {
                 [0.0, 0.0],
                 [2.0, 0.0],
                 Some(&serde_json::json!({"type": "circle", "params": [r, large, right]})),
-                false,
+                None,
             )
             .unwrap()
         };
@@ -834,6 +859,38 @@ pub(crate) mod tests {
                 right_wrong: true
             }]
         );
+    }
+
+    #[test]
+    fn centred_panels_keep_their_place_when_unrotated() {
+        let panel = r#""p": {"translation": [1, 2, 3], "vertices": [[10, 0], [30, 0], [30, 20]],
+            "edges": [{"endpoints": [0, 1], "curvature": [20, -5]}, {"endpoints": [1, 2]}, {"endpoints": [2, 0]}]}"#;
+        let text = |centre: bool| {
+            format!(
+                r#"{{"pattern": {{"panels": {{{panel}}}}}, "properties": {{"units_in_meter": 100,
+                "curvature_coords": "absolute", "normalize_panel_translation": {centre}}}}}"#
+            )
+        };
+        let (a, b) = (
+            Pattern::parse(&text(false), "a").unwrap(),
+            Pattern::parse(&text(true), "b").unwrap(),
+        );
+        let (a, b) = (&a.panels[0], &b.panels[0]);
+        let mean: Point2 = [0, 1].map(|k| b.vertices.iter().map(|v| v[k]).sum::<f64>() / 3.0);
+        assert!(mean[0].abs() < 1e-12 && mean[1].abs() < 1e-12);
+        assert!(
+            (b.translation[0] - (1.0 + 70.0 / 3.0)).abs() < 1e-12
+                && (b.translation[1] - (2.0 + 20.0 / 3.0)).abs() < 1e-12
+        );
+        // every point of every edge lands in the same place
+        for (ea, eb) in a.edges.iter().zip(&b.edges) {
+            for t in [0.0, 0.3, 0.5, 1.0] {
+                let (pa, pb) = (ea.curve.point(t), eb.curve.point(t));
+                let wa = [pa[0] + a.translation[0], pa[1] + a.translation[1]];
+                let wb = [pb[0] + b.translation[0], pb[1] + b.translation[1]];
+                assert!(dist(wa, wb) < 1e-12, "{wa:?} vs {wb:?}");
+            }
+        }
     }
 
     fn load_err(text: &str) -> String {
