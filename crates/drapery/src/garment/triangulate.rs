@@ -282,25 +282,32 @@ fn flip_slivers(flat: &[Point2], tris: &mut [[u32; 3]], h: f64) {
         )
         .abs()
     };
-    for _ in 0..tris.len() {
-        let Some(s) = (0..tris.len()).find(|&i| area2(tris[i]) < tiny) else {
-            return;
-        };
-        // rotate the sliver so that its longest edge is r → p
-        let t = tris[s];
-        let len = |k: usize| dist(flat[t[k] as usize], flat[t[(k + 1) % 3] as usize]);
-        let k = (0..3).max_by(|&a, &b| len(a).total_cmp(&len(b))).unwrap(); // edge t[k] → t[k+1]
-        let (r, p, q) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-        let neighbour = (0..tris.len())
-            .find(|&i| i != s && (0..3).any(|j| tris[i][j] == p && tris[i][(j + 1) % 3] == r));
-        let Some(n) = neighbour else { return };
-        let x = *tris[n].iter().find(|&&v| v != p && v != r).unwrap();
-        let (a, b) = ([p, q, x], [q, r, x]);
-        if area2(a) < tiny || area2(b) < tiny {
-            return; // nothing better to flip to
+    // passes until nothing flips (a sliver next to another flips once that one has)
+    loop {
+        let mut flipped = false;
+        for s in 0..tris.len() {
+            if area2(tris[s]) >= tiny {
+                continue;
+            }
+            // rotate the sliver so that its longest edge is r → p
+            let t = tris[s];
+            let len = |k: usize| dist(flat[t[k] as usize], flat[t[(k + 1) % 3] as usize]);
+            let k = (0..3).max_by(|&a, &b| len(a).total_cmp(&len(b))).unwrap(); // t[k] → t[k+1]
+            let (r, p, q) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            let neighbour = (0..tris.len())
+                .find(|&i| i != s && (0..3).any(|j| tris[i][j] == p && tris[i][(j + 1) % 3] == r));
+            let Some(n) = neighbour else { continue };
+            let x = *tris[n].iter().find(|&&v| v != p && v != r).unwrap();
+            let (a, b) = ([p, q, x], [q, r, x]);
+            if area2(a) >= tiny && area2(b) >= tiny {
+                tris[s] = a;
+                tris[n] = b;
+                flipped = true;
+            }
         }
-        tris[s] = a;
-        tris[n] = b;
+        if !flipped {
+            return;
+        }
     }
 }
 
@@ -702,30 +709,49 @@ mod tests {
     }
 
     #[test]
-    fn a_sliver_along_a_straight_edge_is_flipped_into_two_sound_triangles() {
-        // q lies 1e-15 off the chord p–r (rounding along a straight outline edge)
-        let flat = [[0.0, 0.0], [1.0, -1e-15], [2.0, 0.0], [1.0, 1.0]];
-        let mut tris = [[0, 1, 2], [0, 2, 3]];
-        let area = |t: [u32; 3]| {
-            0.5 * orient(
-                flat[t[0] as usize],
-                flat[t[1] as usize],
-                flat[t[2] as usize],
-            )
-        };
-        let before: f64 = tris.iter().map(|&t| area(t)).sum();
-        flip_slivers(&flat, &mut tris, 1.0);
-        assert!(tris.iter().all(|&t| area(t) > 0.4), "{tris:?}");
-        assert!((tris.iter().map(|&t| area(t)).sum::<f64>() - before).abs() < 1e-12);
-        // the outer boundary p → q → r → x → p is kept
-        let mut edges: Vec<(u32, u32)> = tris
-            .iter()
-            .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
-            .collect();
-        let all = edges.clone();
-        edges.retain(|&(a, b)| !all.contains(&(b, a)));
-        edges.sort();
-        assert_eq!(edges, [(0, 1), (1, 2), (2, 3), (3, 0)]);
+    fn slivers_along_a_straight_edge_are_flipped_into_sound_triangles() {
+        // one sliver: q lies 1e-15 off the chord p–r (rounding along a straight outline edge);
+        // then a chain of two, where the first can only flip once the second has
+        let one = (
+            vec![[0.0, 0.0], [1.0, -1e-15], [2.0, 0.0], [1.0, 1.0]],
+            vec![[0, 1, 2], [0, 2, 3]],
+        );
+        let chain = (
+            vec![
+                [0.0, 0.0],
+                [1.0, -1e-15],
+                [2.0, -1e-15],
+                [3.0, 0.0],
+                [1.5, 1.0],
+            ],
+            vec![[0, 1, 2], [0, 2, 3], [0, 3, 4]],
+        );
+        for (flat, mut tris) in [one, chain] {
+            let area = |t: [u32; 3]| {
+                0.5 * orient(
+                    flat[t[0] as usize],
+                    flat[t[1] as usize],
+                    flat[t[2] as usize],
+                )
+            };
+            let before: f64 = tris.iter().map(|&t| area(t)).sum();
+            flip_slivers(&flat, &mut tris, 1.0);
+            assert!(tris.iter().all(|&t| area(t) > 0.1), "{tris:?}");
+            assert!((tris.iter().map(|&t| area(t)).sum::<f64>() - before).abs() < 1e-12);
+            // the outer boundary 0 → 1 → … → last → 0 is kept
+            let mut edges: Vec<(u32, u32)> = tris
+                .iter()
+                .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+                .collect();
+            let all = edges.clone();
+            edges.retain(|&(a, b)| !all.contains(&(b, a)));
+            edges.sort();
+            let n = flat.len() as u32;
+            let ring: Vec<(u32, u32)> = (0..n).map(|i| (i, (i + 1) % n)).collect();
+            let mut ring = ring;
+            ring.sort();
+            assert_eq!(edges, ring);
+        }
     }
 
     #[test]
