@@ -755,6 +755,27 @@ mod tests {
     }
 
     #[test]
+    fn an_outline_that_crosses_itself_only_once_subdivided_coarsely_is_an_error() {
+        // a tall parabolic arch A → B and a return path that reaches A from below the arch but
+        // above its chord: simple as drawn, crossed by the arch's chord A–apex at 2 segments
+        let pocket = r#""pocket": {"vertices": [[0, 0], [20, 0], [20, -5], [5, -5], [3, 4.13]], "edges": [
+            {"endpoints": [0, 1], "curvature": {"type": "quadratic", "params": [[0.5, 1.0]]}},
+            {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 4]}, {"endpoints": [4, 0]}]}"#;
+        let p = Pattern::parse(&spec(pocket, ""), "pocket.json").unwrap();
+        let e = p.triangulate(0.5).unwrap_err().to_string();
+        assert!(
+            e.contains("pocket.json")
+                && e.contains("panel `pocket`")
+                && e.contains("crosses itself")
+                && e.contains("smaller"),
+            "{e}"
+        );
+        let g = p.triangulate(0.005).unwrap();
+        assert_area(&p, &g, None);
+        assert_well_formed(&g.panels[0]);
+    }
+
+    #[test]
     fn an_edge_stitched_twice_and_a_bad_edge_length_are_errors() {
         let two = format!("{}, {}", square("a", 10.0), square("b", 10.0));
         let text = spec(
