@@ -722,6 +722,13 @@ pub(crate) mod tests {
         )
     }
 
+    /// Asserts that the error text `e` mentions every one of `words`.
+    pub(crate) fn assert_mentions(e: &str, words: &[&str]) {
+        for w in words {
+            assert!(e.contains(w), "`{w}` missing from: {e}");
+        }
+    }
+
     fn close(a: Point2, b: Point2) -> bool {
         dist(a, b) < 1e-12
     }
@@ -918,13 +925,7 @@ pub(crate) mod tests {
             &two,
             r#"[{"panel": "front", "edge": 1}, {"panel": "back", "edge": 3}], [{"panel": "front", "edge": 3}, {"panel": "back", "edge": 4}]"#,
         ));
-        assert!(
-            e.contains("stitch 1")
-                && e.contains("edge 4")
-                && e.contains("`back`")
-                && e.contains("4 edges"),
-            "{e}"
-        );
+        assert_mentions(&e, &["stitch 1", "edge 4", "`back`", "4 edges"]);
     }
 
     #[test]

@@ -402,7 +402,7 @@ impl SegmentGrid {
 mod tests {
     use super::*;
     use crate::garment::pattern::Curve;
-    use crate::garment::pattern::tests::{spec, square};
+    use crate::garment::pattern::tests::{assert_mentions, spec, square};
     use std::collections::HashMap;
     use std::f64::consts::PI;
 
@@ -763,12 +763,9 @@ mod tests {
             {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 4]}, {"endpoints": [4, 0]}]}"#;
         let p = Pattern::parse(&spec(pocket, ""), "pocket.json").unwrap();
         let e = p.triangulate(0.5).unwrap_err().to_string();
-        assert!(
-            e.contains("pocket.json")
-                && e.contains("panel `pocket`")
-                && e.contains("crosses itself")
-                && e.contains("smaller"),
-            "{e}"
+        assert_mentions(
+            &e,
+            &["pocket.json", "panel `pocket`", "crosses itself", "smaller"],
         );
         let g = p.triangulate(0.005).unwrap();
         assert_area(&p, &g, None);
