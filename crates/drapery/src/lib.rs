@@ -25,6 +25,7 @@ pub mod constraints;
 pub mod error;
 pub mod fingerprint;
 pub mod forces;
+pub mod garment;
 pub mod io;
 pub mod linalg;
 pub mod math;
