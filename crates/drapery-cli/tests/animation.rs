@@ -152,7 +152,10 @@ fn bad_keyframes_are_named() {
     assert_rejected(
         &format!("{BOX}keyframes = [{{ time = 0.0 }}, {{ time = 0.0 }}]\n"),
         &[],
-        &["scene.toml", "collider[0].keyframes[1].time: must be greater than the time of the key before it"],
+        &[
+            "scene.toml",
+            "collider[0].keyframes[1].time: must be greater than the time of the key before it",
+        ],
     );
     assert_rejected(
         &format!("{BOX}keyframes = [{{ time = 0.0 }}, {{ translation = [1, 0, 0] }}]\n"),

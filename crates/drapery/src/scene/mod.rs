@@ -70,6 +70,7 @@ use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 mod collider;
+mod garment;
 mod handle;
 mod stitch;
 
@@ -124,6 +125,8 @@ struct SceneFile {
     collider: Vec<toml::Table>,
     #[serde(default)]
     stitch: Vec<toml::Table>,
+    #[serde(default)]
+    garment: Vec<toml::Table>,
 }
 
 #[derive(Deserialize)]
@@ -323,9 +326,9 @@ impl Scene {
         let solver = solver_settings(&file.solver);
         solver.validate().map_err(located)?;
 
-        if file.cloth.is_empty() {
+        if file.cloth.is_empty() && file.garment.is_empty() {
             return Err(file_err(
-                "no [[cloth]] table: a scene needs at least one cloth".into(),
+                "no [[cloth]] or [[garment]] table: a scene needs at least one cloth".into(),
             ));
         }
         let dir = path.parent().unwrap_or(Path::new(""));
@@ -407,10 +410,15 @@ impl Scene {
         }
         collider::unique_names(&obstacles).map_err(located)?;
         handle::resolve_attachments(&mut cloths, &attachments, &obstacles).map_err(located)?;
-        let stitches = (file.stitch.iter().enumerate())
+        let mut stitches = (file.stitch.iter().enumerate())
             .map(|(i, t)| stitch::stitch(i, t, dir))
             .collect::<Result<Vec<_>>>()
             .map_err(located)?;
+        for (i, t) in file.garment.iter().enumerate() {
+            let (c, s) = garment::garment(i, t, dir).map_err(located)?;
+            cloths.extend(c);
+            stitches.extend(s);
+        }
         if collision.is_none() && !obstacles.is_empty() {
             collision = Some(CollisionSettings::default());
         }

@@ -481,8 +481,13 @@ impl Simulation {
     /// current state (what `drapery check` counts). A starting state with intersections is
     /// reported, not repaired.
     pub fn intersections(&self) -> (usize, usize) {
-        let selfi =
-            crate::collision::check::count_self_intersections(&self.model.x, &self.triangles);
+        // the two ends of a stitched pair count as one vertex (a closed seam's sides touch)
+        let sewn: Vec<[u32; 2]> = self.model.stitches.iter().map(|s| [s.a, s.b]).collect();
+        let selfi = crate::collision::check::count_sewn_intersections(
+            &self.model.x,
+            &self.triangles,
+            &sewn,
+        );
         let colliders: Vec<_> = self
             .model
             .obstacles

@@ -1,0 +1,122 @@
+//! `[[garment]]` tables: a sewing pattern in the GarmentCode format ([`crate::garment`])
+//! triangulated at `edge_length`, each panel a cloth named `GARMENT.PANEL` with the garment's
+//! material, each pattern stitch a [`StitchDesc`] between those cloths.
+//!
+//! ```toml
+//! [[garment]]
+//! name = "skirt"
+//! pattern = "garments/skirt_specification.json"
+//! edge_length = 0.03             # m
+//! translation = [0.0, 0.0, 0.0]  # optional offset of the whole garment, m
+//! density = 0.15                 # or vertex_mass; and the stiffness and damping keys of [[cloth]]
+//! stitch_stiffness = 1000.0      # optional, N/m
+//! ```
+
+use crate::collision::colliders::Keys;
+use crate::error::Result;
+use crate::forces::stitch::{DEFAULT_DAMPING, DEFAULT_STIFFNESS};
+use crate::garment::Pattern;
+use crate::math::Vec3;
+use crate::model::{ClothDesc, MassSpec, Material, StitchDesc, StitchEnd};
+use std::path::Path;
+
+const KEYS: &[&str] = &[
+    "name",
+    "pattern",
+    "edge_length",
+    "translation",
+    "vertex_mass",
+    "density",
+    "stretch_stiffness",
+    "shear_stiffness",
+    "bend_stiffness",
+    "damping",
+    "air_drag",
+    "stitch_stiffness",
+    "stitch_damping",
+];
+
+/// The cloths and stitches of garment `i`.
+pub(super) fn garment(
+    i: usize,
+    table: &toml::Table,
+    dir: &Path,
+) -> Result<(Vec<ClothDesc>, Vec<StitchDesc>)> {
+    let k = Keys::new(table, format!("garment[{i}]"), dir);
+    if let Some(key) = table.keys().find(|key| !KEYS.contains(&key.as_str())) {
+        return Err(k.error(
+            key,
+            format!(
+                "unknown key of [[garment]] (expected one of {})",
+                KEYS.join(", ")
+            ),
+        ));
+    }
+    let name = k.string("name")?;
+    let edge_length = k.positive("edge_length")?;
+    let offset = k.opt_vec3("translation")?.unwrap_or(Vec3::ZERO);
+    let mass = match (k.has("vertex_mass"), k.has("density")) {
+        (true, false) => MassSpec::PerVertex(k.number("vertex_mass")?),
+        (false, true) => MassSpec::Density(k.number("density")?),
+        _ => {
+            return Err(k.error(
+                "density",
+                "give exactly one of density (kg/m²) and vertex_mass (kg)",
+            ));
+        }
+    };
+    let d = Material::default();
+    let or = |key: &str, default: f64| -> Result<f64> {
+        if k.has(key) {
+            k.number(key)
+        } else {
+            Ok(default)
+        }
+    };
+    let material = Material {
+        stretch_stiffness: or("stretch_stiffness", d.stretch_stiffness)?,
+        shear_stiffness: or("shear_stiffness", d.shear_stiffness)?,
+        bend_stiffness: or("bend_stiffness", d.bend_stiffness)?,
+        damping: or("damping", d.damping)?,
+        air_drag: or("air_drag", d.air_drag)?,
+        mass,
+    };
+    let stiffness = or("stitch_stiffness", DEFAULT_STIFFNESS)?;
+    let damping = or("stitch_damping", DEFAULT_DAMPING)?;
+    let garment = Pattern::load(k.file("pattern")?)?.triangulate(edge_length)?;
+    let cloth_name = |p: usize| format!("{name}.{}", garment.panels[p].name);
+    let cloths = garment
+        .panels
+        .iter()
+        .enumerate()
+        .map(|(p, panel)| {
+            let mut mesh = panel.mesh.clone();
+            mesh.positions.iter_mut().for_each(|x| *x += offset);
+            ClothDesc {
+                name: cloth_name(p),
+                mesh,
+                material,
+                pins: Vec::new(),
+                initial_velocity: Vec3::ZERO,
+                handles: Vec::new(),
+            }
+        })
+        .collect();
+    let stitches = garment
+        .stitches
+        .iter()
+        .map(|s| StitchDesc {
+            a: StitchEnd {
+                cloth: cloth_name(s.panels[0]),
+                vertices: s.pairs.iter().map(|p| p[0]).collect(),
+            },
+            b: StitchEnd {
+                cloth: cloth_name(s.panels[1]),
+                vertices: s.pairs.iter().map(|p| p[1]).collect(),
+            },
+            stiffness,
+            damping,
+        })
+        .collect();
+    Ok((cloths, stitches))
+}
