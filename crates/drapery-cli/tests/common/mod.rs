@@ -164,12 +164,6 @@ pub fn assert_rejected(extra: &str, files: &[(&str, &str)], wants: &[&str]) {
         "-o".as_ref(),
         out.as_os_str(),
     ]);
-    assert_eq!(r.code, Some(1), "{extra}: {}", r.stderr);
-    let lines: Vec<&str> = r.stderr.lines().collect();
-    assert_eq!(lines.len(), 1, "{:?}", r.stderr);
-    assert!(lines[0].starts_with("error: "), "{}", lines[0]);
-    for w in wants {
-        assert!(lines[0].contains(w), "{w:?} not in {:?}", lines[0]);
-    }
+    assert_one_error(&r, wants);
     assert!(!out.exists(), "output written for bad input");
 }
