@@ -368,15 +368,7 @@ impl Simulation {
         index: usize,
         motion: crate::animation::Motion,
     ) -> Result<()> {
-        let n = self.model.obstacles.len();
-        let field = format!("collider[{index}]");
-        let Some(o) = self.model.obstacles.get_mut(index) else {
-            return Err(crate::Error::field(
-                field,
-                format!("no such collider: the scene has {n}"),
-            ));
-        };
-        motion.validate(&field)?;
+        let o = checked(&mut self.model.obstacles, index, "collider", &motion)?;
         o.collider.motion = motion;
         Ok(())
     }
@@ -408,15 +400,7 @@ impl Simulation {
         index: usize,
         motion: crate::animation::Motion,
     ) -> Result<()> {
-        let n = self.model.handles.len();
-        let field = format!("handle[{index}]");
-        let Some(h) = self.model.handles.get_mut(index) else {
-            return Err(crate::Error::field(
-                field,
-                format!("no such handle: the scene has {n}"),
-            ));
-        };
-        motion.validate(&field)?;
+        let h = checked(&mut self.model.handles, index, "handle", &motion)?;
         h.motion = motion;
         Ok(())
     }
@@ -498,6 +482,24 @@ impl Simulation {
             crate::collision::check::count_penetrations(&self.model.x, &colliders, self.time, 0.0);
         (selfi, pen)
     }
+}
+
+/// Item `index` of `items` (`what[index]` in errors) when it exists and `motion` is finite.
+fn checked<'a, T>(
+    items: &'a mut [T],
+    index: usize,
+    what: &str,
+    motion: &crate::animation::Motion,
+) -> Result<&'a mut T> {
+    let (n, field) = (items.len(), format!("{what}[{index}]"));
+    if index >= n {
+        return Err(crate::Error::field(
+            field,
+            format!("no such {what}: the scene has {n}"),
+        ));
+    }
+    motion.validate(&field)?;
+    Ok(&mut items[index])
 }
 
 /// The forces of a model: gravity, then springs and spring damping (the springs with a
