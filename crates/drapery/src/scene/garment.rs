@@ -43,15 +43,7 @@ pub(super) fn garment(
     dir: &Path,
 ) -> Result<(Vec<ClothDesc>, Vec<StitchDesc>)> {
     let k = Keys::new(table, format!("garment[{i}]"), dir);
-    if let Some(key) = table.keys().find(|key| !KEYS.contains(&key.as_str())) {
-        return Err(k.error(
-            key,
-            format!(
-                "unknown key of [[garment]] (expected one of {})",
-                KEYS.join(", ")
-            ),
-        ));
-    }
+    k.only(KEYS, "[[garment]]")?;
     let name = k.string("name")?;
     let edge_length = k.positive("edge_length")?;
     let offset = k.opt_vec3("translation")?.unwrap_or(Vec3::ZERO);

@@ -31,15 +31,7 @@ pub(super) fn handle(
     dir: &Path,
 ) -> Result<(HandleDesc, Option<String>)> {
     let keys = Keys::new(table, format!("cloth[{i}].handle[{k}]"), dir);
-    if let Some(key) = table.keys().find(|key| !KEYS.contains(&key.as_str())) {
-        return Err(keys.error(
-            key,
-            format!(
-                "unknown key of [[cloth.handle]] (expected one of {})",
-                KEYS.join(", ")
-            ),
-        ));
-    }
+    keys.only(KEYS, "[[cloth.handle]]")?;
     let vertices = match (table.get("vertices"), table.get("region")) {
         (Some(_), Some(_)) => {
             return Err(keys.error("region", "give either vertices or region, not both"));
@@ -50,18 +42,7 @@ pub(super) fn handle(
                 "missing: give `vertices = [...]` or `region = { min = [x, y, z], max = [x, y, z] }`",
             ));
         }
-        (Some(v), None) => {
-            let bad = || keys.error("vertices", "must be an array of vertex indices ≥ 0");
-            v.as_array()
-                .ok_or_else(bad)?
-                .iter()
-                .map(|x| {
-                    x.as_integer()
-                        .and_then(|i| u32::try_from(i).ok())
-                        .ok_or_else(bad)
-                })
-                .collect::<Result<Vec<u32>>>()?
-        }
+        (Some(_), None) => keys.indices("vertices")?,
         (None, Some(r)) => {
             let region = r.as_table().ok_or_else(|| {
                 keys.error(

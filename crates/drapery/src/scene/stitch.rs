@@ -11,20 +11,6 @@ use std::path::Path;
 const KEYS: &[&str] = &["a", "b", "stiffness", "damping"];
 const SIDE_KEYS: &[&str] = &["cloth", "vertices"];
 
-/// The first key of `table` not in `known`, as an error of `keys`.
-fn unknown(keys: &Keys, table: &toml::Table, known: &[&str], what: &str) -> Result<()> {
-    match table.keys().find(|key| !known.contains(&key.as_str())) {
-        Some(key) => Err(keys.error(
-            key,
-            format!(
-                "unknown key of {what} (expected one of {})",
-                known.join(", ")
-            ),
-        )),
-        None => Ok(()),
-    }
-}
-
 /// One side, `name` = `a` or `b`, of stitch `keys`.
 fn side(keys: &Keys, table: &toml::Table, name: &str, dir: &Path) -> Result<StitchEnd> {
     let shape = "must be a table { cloth = \"NAME\", vertices = [...] }";
@@ -34,29 +20,16 @@ fn side(keys: &Keys, table: &toml::Table, name: &str, dir: &Path) -> Result<Stit
         .as_table()
         .ok_or_else(|| keys.error(name, shape))?;
     let k = Keys::new(t, keys.path(name), dir);
-    unknown(&k, t, SIDE_KEYS, "a stitch side")?;
+    k.only(SIDE_KEYS, "a stitch side")?;
     let cloth = k.string("cloth")?.to_string();
-    let list = t
-        .get("vertices")
-        .ok_or_else(|| k.error("vertices", "missing: an array of vertex indices"))?;
-    let bad = || k.error("vertices", "must be an array of vertex indices ≥ 0");
-    let vertices = list
-        .as_array()
-        .ok_or_else(bad)?
-        .iter()
-        .map(|v| {
-            v.as_integer()
-                .and_then(|i| u32::try_from(i).ok())
-                .ok_or_else(bad)
-        })
-        .collect::<Result<Vec<u32>>>()?;
+    let vertices = k.indices("vertices")?;
     Ok(StitchEnd { cloth, vertices })
 }
 
 /// One `[[stitch]]` table (index `i`).
 pub(super) fn stitch(i: usize, table: &toml::Table, dir: &Path) -> Result<StitchDesc> {
     let keys = Keys::new(table, format!("stitch[{i}]"), dir);
-    unknown(&keys, table, KEYS, "[[stitch]]")?;
+    keys.only(KEYS, "[[stitch]]")?;
     let optional = |key: &str, default: f64| match keys.has(key) {
         true => keys.number(key),
         false => Ok(default),

@@ -101,6 +101,38 @@ impl<'a> Keys<'a> {
         quat(&self.path(key), self.numbers::<4>(key, v)?).map(Some)
     }
 
+    /// An error naming the first key of the table not in `known` ("unknown key of `what`").
+    pub fn only(&self, known: &[&str], what: &str) -> Result<()> {
+        match self.table.keys().find(|key| !known.contains(&key.as_str())) {
+            Some(key) => Err(self.error(
+                key,
+                format!(
+                    "unknown key of {what} (expected one of {})",
+                    known.join(", ")
+                ),
+            )),
+            None => Ok(()),
+        }
+    }
+
+    /// A required array of vertex indices (whole numbers ≥ 0).
+    pub fn indices(&self, key: &str) -> Result<Vec<u32>> {
+        let list = self
+            .table
+            .get(key)
+            .ok_or_else(|| self.error(key, "missing: an array of vertex indices"))?;
+        let bad = || self.error(key, "must be an array of vertex indices ≥ 0");
+        list.as_array()
+            .ok_or_else(bad)?
+            .iter()
+            .map(|v| {
+                v.as_integer()
+                    .and_then(|i| u32::try_from(i).ok())
+                    .ok_or_else(bad)
+            })
+            .collect()
+    }
+
     /// A required string.
     pub fn string(&self, key: &str) -> Result<&'a str> {
         self.get(key)?
@@ -130,15 +162,7 @@ impl<'a> Keys<'a> {
                 Error::field(&field, "must be a table { time, translation, rotation }")
             })?;
             let k = Keys::new(table, field, self.dir);
-            if let Some(key) = table
-                .keys()
-                .find(|key| !["time", "translation", "rotation"].contains(&key.as_str()))
-            {
-                return Err(k.error(
-                    key,
-                    "unknown key of a keyframe (time, translation, rotation)",
-                ));
-            }
+            k.only(&["time", "translation", "rotation"], "a keyframe")?;
             let rotation = match table.get("rotation") {
                 Some(r) => {
                     let q = k.numbers::<4>("rotation", r)?;
