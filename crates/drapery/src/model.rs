@@ -32,6 +32,55 @@ pub struct Material {
     pub air_drag: f64,
     /// Particle masses.
     pub mass: MassSpec,
+    /// Which forces resist deformation: the seeds' springs or the shell (membrane and hinge
+    /// bending in physical units, docs/MATERIALS.md).
+    pub model: ClothModel,
+    /// The shell model's parameters (read when `model` is [`ClothModel::Shell`]).
+    pub shell: Shell,
+    /// No edge ends a step longer than `(1 + limit)` times its rest length (none when `None`).
+    pub strain_limit: Option<f64>,
+    /// Pressure inside a closed cloth, Pa (0: none).
+    pub pressure: f64,
+}
+
+/// Which forces resist a cloth's deformation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ClothModel {
+    /// Stretch, shear and bend springs in N/m per spring (the seeds' model).
+    #[default]
+    Springs,
+    /// A membrane on triangles and hinge bending on interior edges, in physical units.
+    Shell,
+}
+
+/// Parameters of the shell model, in physical units. Warp and weft are the rest shape's `u` and
+/// `v` directions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shell {
+    /// Stretch modulus (Young's modulus times thickness), N/m, along `[warp, weft]`.
+    pub stretch_modulus: [f64; 2],
+    /// Poisson's ratio (warp strain from weft stress).
+    pub poisson: f64,
+    /// In-plane shear modulus, N/m (`None`: the isotropic value from the stretch moduli and
+    /// Poisson's ratio).
+    pub shear_modulus: Option<f64>,
+    /// Bending rigidity, N·m, for bending about `[warp, weft]`... see docs/MATERIALS.md.
+    pub bending_rigidity: [f64; 2],
+    /// Stiffness-proportional damping, s (the damping force is `-damping · H v`, `H` the
+    /// elastic Hessian).
+    pub damping: f64,
+}
+
+impl Default for Shell {
+    fn default() -> Self {
+        Shell {
+            stretch_modulus: [1000.0, 1000.0],
+            poisson: 0.3,
+            shear_modulus: None,
+            bending_rigidity: [1e-5, 1e-5],
+            damping: 0.0,
+        }
+    }
 }
 
 impl Default for Material {
@@ -43,6 +92,10 @@ impl Default for Material {
             damping: 0.01,
             air_drag: 0.0,
             mass: MassSpec::Density(0.1),
+            model: ClothModel::Springs,
+            shell: Shell::default(),
+            strain_limit: None,
+            pressure: 0.0,
         }
     }
 }

@@ -78,6 +78,7 @@ impl Preset {
             damping: 0.01,
             air_drag: 0.0,
             mass: MassSpec::Density(0.1),
+            ..Default::default()
         };
         let (center, normal, pins, obstacle) = match self {
             Preset::Twist => (Vec3::new(0.0, 1.0, 0.0), Vec3::Y, vec![], None),

@@ -7,6 +7,7 @@ pub mod amg;
 pub(crate) mod block;
 pub mod bsr;
 pub mod direct;
+pub mod eigen;
 pub mod pcg;
 pub mod simd;
 pub mod sym;

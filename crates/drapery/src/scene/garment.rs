@@ -72,6 +72,7 @@ pub(super) fn garment(
         damping: or("damping", d.damping)?,
         air_drag: or("air_drag", d.air_drag)?,
         mass,
+        ..Default::default()
     };
     let stiffness = or("stitch_stiffness", DEFAULT_STIFFNESS)?;
     let damping = or("stitch_damping", DEFAULT_DAMPING)?;

@@ -381,6 +381,7 @@ impl Scene {
                 damping: c.damping.unwrap_or(d.damping),
                 air_drag: c.air_drag.unwrap_or(d.air_drag),
                 mass,
+                ..Default::default()
             };
             let mut handles = Vec::with_capacity(c.handle.len());
             for (k, t) in c.handle.iter().enumerate() {

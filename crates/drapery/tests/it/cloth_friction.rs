@@ -23,6 +23,7 @@ fn material() -> Material {
         damping: 0.02,
         air_drag: 0.0,
         mass: MassSpec::Density(0.2),
+        ..Default::default()
     }
 }
 

@@ -21,6 +21,7 @@ fn sheet(name: &str, n: usize, size: f64, center: Vec3, normal: Vec3, velocity: 
             damping: 0.02,
             air_drag: 0.001,
             mass: MassSpec::Density(0.2),
+            ..Default::default()
         },
         pins: vec![],
         initial_velocity: velocity,

@@ -81,6 +81,7 @@ pub fn material(mass: MassSpec) -> Material {
         damping: 0.01,
         air_drag: 0.0,
         mass,
+        ..Default::default()
     }
 }
 

@@ -25,6 +25,7 @@ fn a_hanging_chain_settles_to_weight_below_over_k_per_spring() {
         damping: 0.5,
         air_drag: 0.02,
         mass: MassSpec::PerVertex(m),
+        ..Default::default()
     };
     let model = Model::new(
         vec![ClothDesc {

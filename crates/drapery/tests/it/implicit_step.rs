@@ -30,6 +30,7 @@ fn linear_spring(
         damping: 0.0,
         air_drag: c,
         mass: MassSpec::PerVertex(m),
+        ..Default::default()
     };
     let mut model = Model::new(
         vec![ClothDesc {

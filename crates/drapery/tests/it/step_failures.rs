@@ -26,6 +26,7 @@ fn rod(k: f64, c: f64, mass: f64, pinned: bool, velocity: Vec3, gravity: Vec3) -
             damping: c,
             air_drag: 0.0,
             mass: MassSpec::PerVertex(mass),
+            ..Default::default()
         },
         pins: if pinned { vec![0] } else { vec![] },
         initial_velocity: velocity,

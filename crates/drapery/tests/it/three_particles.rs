@@ -143,6 +143,7 @@ fn one_step_of_the_three_particle_cloth_equals_the_hand_assembled_dense_solve() 
         damping: 0.0,
         air_drag: 0.0,
         mass: MassSpec::PerVertex(1.0),
+        ..Default::default()
     };
     let mut model = Model::new(
         vec![ClothDesc {
