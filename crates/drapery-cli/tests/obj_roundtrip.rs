@@ -30,6 +30,7 @@ fn written_frames_read_back_to_identical_f64_bits_across_several_cloths() {
         ],
         faces: vec![Face::Quad([0, 1, 2, 3]), Face::Tri([3, 2, 4])],
         lines: vec![[4, 0]],
+        face_uv: Vec::new(),
     };
     let rope = Mesh {
         positions: vec![
@@ -39,6 +40,7 @@ fn written_frames_read_back_to_identical_f64_bits_across_several_cloths() {
         ],
         faces: vec![],
         lines: vec![[0, 1], [1, 2]],
+        face_uv: Vec::new(),
     };
     let cloths = vec![
         ClothInfo {
@@ -94,6 +96,7 @@ fn written_frames_read_back_to_identical_f64_bits_across_several_cloths() {
             positions: x.clone(),
             faces: vec![],
             lines: (0..7).map(|i| [i, i + 1]).collect(),
+            face_uv: Vec::new(),
         },
     };
     let path2 = dir.path().join("awkward.obj");

@@ -72,6 +72,14 @@ pub fn fingerprint(scene: &Scene, scene_text: &[u8]) -> u64 {
         for l in &c.mesh.lines {
             h.u64(l[0] as u64).u64(l[1] as u64);
         }
+        // texture coordinates orient the shell model's warp and weft (hashed only for shells,
+        // so the fingerprints of spring cloths stay as they were)
+        if c.material.model == crate::model::ClothModel::Shell {
+            h.bytes(b"uv").u64(c.mesh.face_uv.len() as u64);
+            for uv in c.mesh.face_uv.iter().flatten().flatten() {
+                h.u64(uv.to_bits());
+            }
+        }
     }
     // Collisions (only when the scene has them, so older fingerprints stay valid): the
     // settings and every collider as loaded, mesh collider vertices and triangles included.

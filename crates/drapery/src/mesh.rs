@@ -45,6 +45,10 @@ pub struct Mesh {
     pub faces: Vec<Face>,
     /// Line elements (`l` in OBJ), in input order.
     pub lines: Vec<[u32; 2]>,
+    /// Texture coordinates of each face's corners (`vt` in OBJ; a grid's or a pattern panel's
+    /// own 2-D coordinates), one entry per face, a triangle's fourth unused; empty when the
+    /// mesh has none. The shell model takes its warp (`u`) and weft (`v`) directions from them.
+    pub face_uv: Vec<[[f64; 2]; 4]>,
 }
 
 /// Unordered vertex pair key.
@@ -61,6 +65,22 @@ impl Mesh {
     /// All triangles, quads split along their `a–c` diagonal.
     pub fn triangles(&self) -> Vec<[u32; 3]> {
         self.faces.iter().flat_map(|f| f.triangles()).collect()
+    }
+
+    /// The texture coordinates of the corners of [`Mesh::triangles`], in the same order (`None`
+    /// when the mesh has none).
+    pub fn triangle_uvs(&self) -> Option<Vec<[[f64; 2]; 3]>> {
+        if self.face_uv.len() != self.faces.len() {
+            return None;
+        }
+        let mut out = Vec::with_capacity(self.faces.len() * 2);
+        for (f, uv) in self.faces.iter().zip(&self.face_uv) {
+            out.push([uv[0], uv[1], uv[2]]);
+            if let Face::Quad(_) = f {
+                out.push([uv[0], uv[2], uv[3]]);
+            }
+        }
+        Some(out)
     }
 
     /// Checks indices, finiteness and degeneracy. `what` names the mesh in messages.
@@ -319,17 +339,27 @@ impl Mesh {
             }
         }
         let mut faces = Vec::with_capacity((nx - 1) * (ny - 1));
+        let mut face_uv = Vec::with_capacity((nx - 1) * (ny - 1));
+        // u runs along the grid's first axis, v along its second (metres from the centre)
+        let uv = |r: usize, c: usize| {
+            [
+                (c as f64 / (nx - 1) as f64 - 0.5) * size[0],
+                (r as f64 / (ny - 1) as f64 - 0.5) * size[1],
+            ]
+        };
         for r in 0..ny - 1 {
             for c in 0..nx - 1 {
                 let i = (r * nx + c) as u32;
                 let nxu = nx as u32;
                 faces.push(Face::Quad([i, i + nxu, i + nxu + 1, i + 1]));
+                face_uv.push([uv(r, c), uv(r + 1, c), uv(r + 1, c + 1), uv(r, c + 1)]);
             }
         }
         Ok(Mesh {
             positions,
             faces,
             lines: Vec::new(),
+            face_uv,
         })
     }
 }
@@ -382,6 +412,7 @@ mod tests {
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0)],
             faces: vec![Face::Tri([0, 1, 2]), Face::Tri([1, 3, 2])],
             lines: vec![],
+            face_uv: Vec::new(),
         };
         assert_eq!(sorted(m.bend_pairs()), vec![(0, 3)]);
         assert_eq!(m.edges().len(), 5);

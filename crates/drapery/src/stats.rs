@@ -99,6 +99,7 @@ mod tests {
             positions: (0..4).map(|k| Vec3::new(k as f64, 2.0, 0.0)).collect(),
             faces: Vec::new(),
             lines: vec![[0, 1], [1, 2], [2, 3]],
+            face_uv: Vec::new(),
         };
         let model = Model::new(
             vec![

@@ -256,12 +256,23 @@ impl Pattern {
                 )
             })
             .collect();
+        // the panel's own 2-D coordinates are its texture coordinates (warp along its x)
+        let face_uv = (faces.iter())
+            .map(|f| {
+                let mut uv = [[0.0; 2]; 4];
+                for (c, &i) in f.indices().iter().enumerate() {
+                    uv[c] = [flat[i as usize][0], flat[i as usize][1]];
+                }
+                uv
+            })
+            .collect();
         Ok(PanelMesh {
             name: panel.name.clone(),
             mesh: Mesh {
                 positions,
                 faces,
                 lines: Vec::new(),
+                face_uv,
             },
             flat,
             edges,

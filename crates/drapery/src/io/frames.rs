@@ -138,6 +138,7 @@ pub fn read_frame(path: &Path) -> Result<Mesh> {
                 positions,
                 faces,
                 lines: Vec::new(),
+                face_uv: Vec::new(),
             })
         }
         _ => Err(Error::input(

@@ -1256,6 +1256,7 @@ pub(crate) mod tests {
                 .collect(),
             faces: vec![],
             lines: vec![[0, 1], [1, 2], [2, 3]],
+            face_uv: Vec::new(),
         };
         let n0 = sheet.positions.len();
         let mut base = sheet.positions.clone();

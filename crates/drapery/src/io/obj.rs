@@ -70,6 +70,9 @@ pub fn parse_obj(bytes: &[u8], what: &str) -> Result<Mesh> {
         vertex_lines: Vec::with_capacity(total_vertices),
     };
     let mut normalised = String::with_capacity(text.len());
+    // texture coordinates, and each face's corners' (None for a face without them)
+    let mut texcoords: Vec<[f64; 2]> = Vec::new();
+    let mut face_uv: Vec<Option<[[f64; 2]; 4]>> = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let lineno = i + 1;
         let mut words = line.split_whitespace();
@@ -106,6 +109,7 @@ pub fn parse_obj(bytes: &[u8], what: &str) -> Result<Mesh> {
                         )));
                     }
                 }
+                face_uv.push(corner_uvs(&args, &texcoords));
                 normalised.push('f');
                 for v in &idx {
                     let _ = write!(normalised, " {}", v + 1);
@@ -131,7 +135,16 @@ pub fn parse_obj(bytes: &[u8], what: &str) -> Result<Mesh> {
                 normalised.push_str(line.trim());
                 normalised.push('\n');
             }
-            // vt, vn, s, usemtl, mtllib, comments, …: not needed by the simulator.
+            "vt" => {
+                // `u v` (an optional w ignored); anything else leaves the faces that use it
+                // without texture coordinates
+                let c = |k: usize| args.get(k).and_then(|a| a.parse::<f64>().ok());
+                texcoords.push(match (c(0), c(1)) {
+                    (Some(u), Some(v)) if u.is_finite() && v.is_finite() => [u, v],
+                    _ => [f64::NAN; 2],
+                });
+            }
+            // vn, s, usemtl, mtllib, comments, …: not needed by the simulator.
             _ => {}
         }
     }
@@ -139,11 +152,31 @@ pub fn parse_obj(bytes: &[u8], what: &str) -> Result<Mesh> {
         return Err(err("mesh has no vertices (no 'v' lines)".into()));
     }
 
-    let mesh = topology_with_tobj(&normalised, positions, &origins)
+    let mut mesh = topology_with_tobj(&normalised, positions, &origins)
         .map_err(|m| err(format!("cannot read the faces: {m}")))?;
+    // texture coordinates count only when every face has them
+    if let Some(uv) = face_uv.into_iter().collect::<Option<Vec<_>>>() {
+        mesh.face_uv = uv;
+    }
     mesh.validate(what)
         .map_err(|e| with_line_numbers(e, &origins))?;
     Ok(mesh)
+}
+
+/// The texture coordinates of a face's corners (`v/vt` or `v/vt/vn`), when every corner has a
+/// valid one (1-based, or negative counting back from the last read).
+fn corner_uvs(args: &[&str], texcoords: &[[f64; 2]]) -> Option<[[f64; 2]; 4]> {
+    let mut uv = [[0.0; 2]; 4];
+    for (c, tok) in args.iter().take(4).enumerate() {
+        let k: i64 = tok.split('/').nth(1)?.parse().ok()?;
+        let at = match k {
+            1.. => k as usize - 1,
+            ..0 => texcoords.len().checked_sub(k.unsigned_abs() as usize)?,
+            0 => return None,
+        };
+        uv[c] = *texcoords.get(at).filter(|t| t[0].is_finite())?;
+    }
+    Some(uv)
 }
 
 /// Parses the numbers of a `v` line: `x y z`, `x y z w` (divided by `w`) or `x y z r g b`.
@@ -295,6 +328,7 @@ fn topology_with_tobj(
         positions,
         faces,
         lines,
+        face_uv: Vec::new(),
     })
 }
 
@@ -470,6 +504,27 @@ mod tests {
     }
 
     #[test]
+    fn texture_coordinates_are_read_per_face_corner() {
+        let quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 2 0\nvt 2 3\nvt 0 3\n";
+        let m = parse(&format!("{quad}f 1/1 2/2 3/3/1 4/-1\nf 1/2 2/3 3/4\n")).unwrap();
+        assert_eq!(
+            m.face_uv,
+            vec![
+                [[0.0, 0.0], [2.0, 0.0], [2.0, 3.0], [0.0, 3.0]],
+                [[2.0, 0.0], [2.0, 3.0], [0.0, 3.0], [0.0, 0.0]],
+            ]
+        );
+        let tris = m.triangle_uvs().unwrap();
+        assert_eq!(tris.len(), 3);
+        assert_eq!(tris[1], [[0.0, 0.0], [2.0, 3.0], [0.0, 3.0]]);
+        // a face without them (or with a bad one) leaves the whole mesh without
+        for tail in ["f 1/1 2/2 3/3\nf 1 3 4\n", "vt 1\nf 1/5 2/2 3/3\n", "f 1/9 2/2 3/3\n"] {
+            let m = parse(&format!("{quad}{tail}")).unwrap();
+            assert!(m.face_uv.is_empty() && m.triangle_uvs().is_none(), "{tail}");
+        }
+    }
+
+    #[test]
     fn errors_name_the_line() {
         let cases = [
             ("v 0 0 0\nv 1 x 0\n", "line 2"),
@@ -507,6 +562,7 @@ mod tests {
             ],
             faces: vec![Face::Tri([0, 1, 2])],
             lines: vec![[3, 0], [4, 1]],
+            face_uv: Vec::new(),
         };
         let info = ClothInfo {
             name: "c".into(),
@@ -562,6 +618,7 @@ mod tests {
                 positions,
                 faces: vec![],
                 lines: vec![],
+                face_uv: Vec::new(),
             },
         }
     }

@@ -385,6 +385,7 @@ mod tests {
             positions: vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE],
             faces: vec![Face::Tri([0, 1, 2])],
             lines: vec![[2, 3]],
+            face_uv: Vec::new(),
         };
         let mut x = a.positions.clone();
         x.extend_from_slice(&b.positions);

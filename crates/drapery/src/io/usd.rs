@@ -429,6 +429,7 @@ pub(crate) mod tests {
             positions: vec![Vec3::X, Vec3::Y, Vec3::Z],
             faces: vec![Face::Tri([0, 1, 2])],
             lines: vec![],
+            face_uv: Vec::new(),
         };
         let mut base = a.positions.clone();
         base.extend_from_slice(&b.positions);

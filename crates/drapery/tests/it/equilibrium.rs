@@ -17,6 +17,7 @@ fn a_hanging_chain_settles_to_weight_below_over_k_per_spring() {
         positions,
         faces: vec![],
         lines,
+        face_uv: Vec::new(),
     };
     let material = Material {
         stretch_stiffness: k,

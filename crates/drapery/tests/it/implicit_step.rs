@@ -22,6 +22,7 @@ fn linear_spring(
         positions: vec![Vec3::ZERO, x1],
         faces: vec![],
         lines: vec![[0, 1]],
+        face_uv: Vec::new(),
     };
     let material = Material {
         stretch_stiffness: k,

@@ -15,6 +15,7 @@ fn rod(k: f64, c: f64, mass: f64, pinned: bool, velocity: Vec3, gravity: Vec3) -
         positions: vec![Vec3::ZERO, Vec3::X],
         faces: vec![],
         lines: vec![[0, 1]],
+        face_uv: Vec::new(),
     };
     let cloth = ClothDesc {
         name: "rod".into(),

@@ -135,6 +135,7 @@ fn one_step_of_the_three_particle_cloth_equals_the_hand_assembled_dense_solve() 
         positions: x.clone(),
         faces: vec![],
         lines: vec![[0, 1], [1, 2]],
+        face_uv: Vec::new(),
     };
     let material = Material {
         stretch_stiffness: K,
