@@ -118,6 +118,7 @@ pub fn frame_files(dir: &Path) -> Result<(BTreeMap<usize, PathBuf>, &'static str
 fn load_frame(path: &Path) -> Result<RenderScene> {
     let mesh = read_frame(path)?;
     let cloth = ClothInfo {
+        material: Default::default(),
         name: "frame".into(),
         offset: 0,
         mesh,

@@ -44,11 +44,13 @@ fn written_frames_read_back_to_identical_f64_bits_across_several_cloths() {
     };
     let cloths = vec![
         ClothInfo {
+            material: Default::default(),
             name: "sheet".into(),
             offset: 0,
             mesh: sheet.clone(),
         },
         ClothInfo {
+            material: Default::default(),
             name: "rope".into(),
             offset: 5,
             mesh: rope.clone(),
@@ -90,6 +92,7 @@ fn written_frames_read_back_to_identical_f64_bits_across_several_cloths() {
 
     // Awkward values: only lines, so no face can be "degenerate".
     let points = ClothInfo {
+        material: Default::default(),
         name: "points".into(),
         offset: 0,
         mesh: Mesh {

@@ -100,6 +100,32 @@ impl Default for Material {
     }
 }
 
+/// Checks the shell model's parameters; `field` makes a key's path (`cloth[0].poisson`).
+fn validate_shell(s: &Shell, field: &dyn Fn(&str) -> String) -> Result<()> {
+    for y in s.stretch_modulus {
+        validate::positive(&field("stretch_modulus"), y)?;
+    }
+    for b in s.bending_rigidity {
+        validate::nonneg(&field("bending_rigidity"), b)?;
+    }
+    validate::nonneg(&field("damping"), s.damping)?;
+    if let Some(g) = s.shear_modulus {
+        validate::positive(&field("shear_modulus"), g)?;
+    }
+    let nu = validate::nonneg(&field("poisson"), s.poisson)?;
+    // ν₁₂ ν₂₁ = ν² E₂/E₁ < 1 keeps the plane-stress law positive definite
+    let [y1, y2] = s.stretch_modulus;
+    if !(nu < 1.0 && nu * nu * y2 / y1 < 1.0) {
+        return Err(Error::field(
+            field("poisson"),
+            format!(
+                "must be < 1 with poisson² × weft/warp modulus < 1 (a positive definite law), got {nu} with moduli [{y1}, {y2}]"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Everything needed to add one cloth to a model.
 #[derive(Clone, Debug)]
 pub struct ClothDesc {
@@ -186,6 +212,8 @@ pub struct ClothInfo {
     pub offset: usize,
     /// The input mesh (topology for output; positions = initial state).
     pub mesh: Mesh,
+    /// Its material.
+    pub material: Material,
 }
 
 impl ClothInfo {
@@ -398,6 +426,15 @@ impl Model {
         validate::nonneg(&field("damping"), mat.damping)?;
         validate::nonneg(&field("air_drag"), mat.air_drag)?;
         validate::finite3(&field("initial_velocity"), c.initial_velocity)?;
+        if mat.model == ClothModel::Shell {
+            validate_shell(&mat.shell, &field)?;
+            if c.mesh.faces.is_empty() {
+                return Err(Error::field(
+                    field("model"),
+                    format!("cloth '{name}' has no faces: the shell model acts on triangles and quads"),
+                ));
+            }
+        }
         let n = c.mesh.positions.len();
         let masses: Vec<f64> = match mat.mass {
             MassSpec::PerVertex(mv) => {
@@ -444,24 +481,36 @@ impl Model {
                 springs.push(a + o, b + o, rest, k, mat.damping, kind);
             }
         };
-        add(
-            c.mesh.edges(),
-            mat.stretch_stiffness,
-            SpringKind::Stretch,
-            &mut self.springs,
-        );
-        add(
-            c.mesh.quad_diagonals(),
-            mat.shear_stiffness,
-            SpringKind::Shear,
-            &mut self.springs,
-        );
-        add(
-            c.mesh.bend_pairs(),
-            mat.bend_stiffness,
-            SpringKind::Bend,
-            &mut self.springs,
-        );
+        match mat.model {
+            ClothModel::Springs => {
+                add(
+                    c.mesh.edges(),
+                    mat.stretch_stiffness,
+                    SpringKind::Stretch,
+                    &mut self.springs,
+                );
+                add(
+                    c.mesh.quad_diagonals(),
+                    mat.shear_stiffness,
+                    SpringKind::Shear,
+                    &mut self.springs,
+                );
+                add(
+                    c.mesh.bend_pairs(),
+                    mat.bend_stiffness,
+                    SpringKind::Bend,
+                    &mut self.springs,
+                );
+            }
+            // the membrane and the hinges act on the faces (built with the forces, from
+            // `ClothInfo::material`); line elements stay springs
+            ClothModel::Shell => add(
+                c.mesh.lines.clone(),
+                mat.stretch_stiffness,
+                SpringKind::Stretch,
+                &mut self.springs,
+            ),
+        }
         if let Some(bad) = (0..self.springs.len()).find(|&s| !(self.springs.rest[s] > 0.0)) {
             return Err(Error::field(
                 field("mesh"),
@@ -487,6 +536,7 @@ impl Model {
             name: c.name,
             offset,
             mesh: c.mesh,
+            material: c.material,
         });
         Ok(())
     }

@@ -1277,11 +1277,13 @@ pub(crate) mod tests {
             .collect();
         let cloths = vec![
             ClothInfo {
+                material: Default::default(),
                 name: "sheet".into(),
                 offset: 0,
                 mesh: sheet,
             },
             ClothInfo {
+                material: Default::default(),
                 name: "rope".into(),
                 offset: n0,
                 mesh: rope,

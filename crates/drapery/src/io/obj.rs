@@ -565,6 +565,7 @@ mod tests {
             face_uv: Vec::new(),
         };
         let info = ClothInfo {
+            material: Default::default(),
             name: "c".into(),
             offset: 0,
             mesh: mesh.clone(),
@@ -612,6 +613,7 @@ mod tests {
 
     fn points(name: &str, positions: Vec<Vec3>) -> ClothInfo {
         ClothInfo {
+            material: Default::default(),
             name: name.into(),
             offset: 0,
             mesh: Mesh {

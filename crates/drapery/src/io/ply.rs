@@ -395,11 +395,13 @@ mod tests {
         }
         let infos = vec![
             ClothInfo {
+                material: Default::default(),
                 name: "a".into(),
                 offset: 0,
                 mesh: a,
             },
             ClothInfo {
+                material: Default::default(),
                 name: "b".into(),
                 offset: 9,
                 mesh: b,

@@ -443,11 +443,13 @@ pub(crate) mod tests {
             .collect();
         let cloths = vec![
             ClothInfo {
+                material: Default::default(),
                 name: "flag-1.v2".into(),
                 offset: 0,
                 mesh: a,
             },
             ClothInfo {
+                material: Default::default(),
                 name: "9lives".into(),
                 offset: 12,
                 mesh: b,

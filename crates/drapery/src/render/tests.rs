@@ -4,6 +4,7 @@ use crate::mesh::Mesh;
 fn sheet(normal: Vec3) -> RenderScene {
     let m = Mesh::grid([1.0, 1.0], [8, 8], Vec3::ZERO, normal).unwrap();
     let info = ClothInfo {
+        material: Default::default(),
         name: "s".into(),
         offset: 0,
         mesh: m.clone(),

@@ -17,21 +17,15 @@ use crate::error::Result;
 use crate::forces::stitch::{DEFAULT_DAMPING, DEFAULT_STIFFNESS};
 use crate::garment::Pattern;
 use crate::math::Vec3;
-use crate::model::{ClothDesc, MassSpec, Material, StitchDesc, StitchEnd};
+use crate::model::{ClothDesc, StitchDesc, StitchEnd};
 use std::path::Path;
 
+/// The keys of `[[garment]]` besides the material's ([`super::material::KEYS`]).
 const KEYS: &[&str] = &[
     "name",
     "pattern",
     "edge_length",
     "translation",
-    "vertex_mass",
-    "density",
-    "stretch_stiffness",
-    "shear_stiffness",
-    "bend_stiffness",
-    "damping",
-    "air_drag",
     "stitch_stiffness",
     "stitch_damping",
 ];
@@ -43,36 +37,14 @@ pub(super) fn garment(
     dir: &Path,
 ) -> Result<(Vec<ClothDesc>, Vec<StitchDesc>)> {
     let k = Keys::new(table, format!("garment[{i}]"), dir);
-    k.only(KEYS, "[[garment]]")?;
+    let known: Vec<&str> = KEYS.iter().chain(super::material::KEYS).copied().collect();
+    k.only(&known, "[[garment]]")?;
     let name = k.string("name")?;
     let edge_length = k.positive("edge_length")?;
     let offset = k.opt_vec3("translation")?.unwrap_or(Vec3::ZERO);
-    let mass = match (k.has("vertex_mass"), k.has("density")) {
-        (true, false) => MassSpec::PerVertex(k.number("vertex_mass")?),
-        (false, true) => MassSpec::Density(k.number("density")?),
-        _ => {
-            return Err(k.error(
-                "density",
-                "give exactly one of density (kg/m²) and vertex_mass (kg)",
-            ));
-        }
-    };
-    let d = Material::default();
+    let material = super::material::material(&k)?;
     let or = |key: &str, default: f64| -> Result<f64> {
-        if k.has(key) {
-            k.number(key)
-        } else {
-            Ok(default)
-        }
-    };
-    let material = Material {
-        stretch_stiffness: or("stretch_stiffness", d.stretch_stiffness)?,
-        shear_stiffness: or("shear_stiffness", d.shear_stiffness)?,
-        bend_stiffness: or("bend_stiffness", d.bend_stiffness)?,
-        damping: or("damping", d.damping)?,
-        air_drag: or("air_drag", d.air_drag)?,
-        mass,
-        ..Default::default()
+        Ok(k.opt_number(key)?.unwrap_or(default))
     };
     let stiffness = or("stitch_stiffness", DEFAULT_STIFFNESS)?;
     let damping = or("stitch_damping", DEFAULT_DAMPING)?;

@@ -64,7 +64,8 @@ use crate::collision::settings::{CollisionSettings, Obstacle};
 use crate::error::{Error, Result};
 use crate::math::Vec3;
 use crate::mesh::Mesh;
-use crate::model::{ClothDesc, MassSpec, Material, Model, StitchDesc};
+use crate::collision::colliders::Keys;
+use crate::model::{ClothDesc, Model, StitchDesc};
 use crate::step::{LinearSolver, Simulation, SolverSettings};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -72,6 +73,7 @@ use std::path::{Path, PathBuf};
 mod collider;
 mod garment;
 mod handle;
+mod material;
 mod stitch;
 
 /// Relative tolerance for "whole number" checks on steps per frame and frame counts.
@@ -165,25 +167,24 @@ enum SolverName {
     Direct,
 }
 
+/// A `[[cloth]]`: its own keys here, the material keys ([`material::KEYS`]) in `rest`, read by
+/// [`material::material`] like a garment's (unknown keys are reported from there).
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
 struct ClothTable {
     name: String,
     mesh: Option<String>,
     grid: Option<GridTable>,
-    vertex_mass: Option<f64>,
-    density: Option<f64>,
-    stretch_stiffness: Option<f64>,
-    shear_stiffness: Option<f64>,
-    bend_stiffness: Option<f64>,
-    damping: Option<f64>,
-    air_drag: Option<f64>,
     #[serde(default)]
     pin: Vec<u32>,
     initial_velocity: Option<[f64; 3]>,
     #[serde(default)]
     handle: Vec<toml::Table>,
+    #[serde(flatten)]
+    rest: toml::Table,
 }
+
+/// The keys of `[[cloth]]` besides the material's.
+const CLOTH_KEYS: &[&str] = &["name", "mesh", "grid", "pin", "initial_velocity", "handle"];
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -359,30 +360,10 @@ impl Scene {
                     )));
                 }
             };
-            let mass = match (c.vertex_mass, c.density) {
-                (Some(m), None) => MassSpec::PerVertex(m),
-                (None, Some(d)) => MassSpec::Density(d),
-                (Some(_), Some(_)) => {
-                    return Err(file_err(format!(
-                        "{what}give either vertex_mass or density, not both"
-                    )));
-                }
-                (None, None) => {
-                    return Err(file_err(format!(
-                        "{what}missing field `vertex_mass` (kg per vertex) or `density` (kg/m²)"
-                    )));
-                }
-            };
-            let d = Material::default();
-            let material = Material {
-                stretch_stiffness: c.stretch_stiffness.unwrap_or(d.stretch_stiffness),
-                shear_stiffness: c.shear_stiffness.unwrap_or(d.shear_stiffness),
-                bend_stiffness: c.bend_stiffness.unwrap_or(d.bend_stiffness),
-                damping: c.damping.unwrap_or(d.damping),
-                air_drag: c.air_drag.unwrap_or(d.air_drag),
-                mass,
-                ..Default::default()
-            };
+            let keys = Keys::new(&c.rest, format!("cloth[{i}]"), dir);
+            let known: Vec<&str> = CLOTH_KEYS.iter().chain(material::KEYS).copied().collect();
+            keys.only(&known, "[[cloth]]").map_err(located)?;
+            let material = material::material(&keys).map_err(located)?;
             let mut handles = Vec::with_capacity(c.handle.len());
             for (k, t) in c.handle.iter().enumerate() {
                 let (h, attach) = handle::handle(i, k, t, &mesh.positions, dir).map_err(located)?;

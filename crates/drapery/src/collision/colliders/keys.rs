@@ -77,6 +77,25 @@ impl<'a> Keys<'a> {
         number(self.get(key)?).ok_or_else(|| self.error(key, "must be a number"))
     }
 
+    /// An optional number.
+    pub fn opt_number(&self, key: &str) -> Result<Option<f64>> {
+        self.has(key).then(|| self.number(key)).transpose()
+    }
+
+    /// An optional pair given as `[a, b]` or as one number for both.
+    pub fn opt_pair(&self, key: &str) -> Result<Option<[f64; 2]>> {
+        let Some(v) = self.table.get(key) else {
+            return Ok(None);
+        };
+        match number(v) {
+            Some(x) => Ok(Some([x, x])),
+            None => self
+                .numbers::<2>(key, v)
+                .map_err(|_| self.error(key, "must be a number or an array of 2 numbers"))
+                .map(Some),
+        }
+    }
+
     /// A required number > 0.
     pub fn positive(&self, key: &str) -> Result<f64> {
         crate::validate::positive(&self.path(key), self.number(key)?)

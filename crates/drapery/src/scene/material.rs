@@ -1,0 +1,154 @@
+//! The material keys that `[[cloth]]` and `[[garment]]` share: the mass, the cloth model and
+//! its parameters, strain limit and pressure.
+//!
+//! ```toml
+//! model = "shell"             # or "springs" (the default)
+//! material = "cotton"         # a fabric preset (docs/MATERIALS.md); implies model = "shell"
+//! density = 0.15              # kg/m² (or vertex_mass, kg)
+//! stretch_modulus = [400, 300] # N/m, [warp, weft] or one number
+//! poisson = 0.3
+//! shear_modulus = 50.0        # N/m, optional
+//! bending_rigidity = 1e-5     # N·m, [warp, weft] or one number
+//! damping = 0.01              # shell: stiffness-proportional, s; springs: N·s/m
+//! strain_limit = 0.05         # optional, either model
+//! pressure = 500.0            # Pa, optional, either model
+//! ```
+//!
+//! Keys of the other model are errors, so a typo of model does not silently drop them. The
+//! values are validated by the model ([`crate::model::Model`]), one validator per fact.
+
+use crate::collision::colliders::Keys;
+use crate::error::Result;
+use crate::model::{ClothModel, MassSpec, Material, Shell};
+
+/// The keys read here.
+pub(super) const KEYS: &[&str] = &[
+    "vertex_mass",
+    "density",
+    "model",
+    "material",
+    "damping",
+    "air_drag",
+    "stretch_stiffness",
+    "shear_stiffness",
+    "bend_stiffness",
+    "stretch_modulus",
+    "poisson",
+    "shear_modulus",
+    "bending_rigidity",
+    "strain_limit",
+    "pressure",
+];
+
+/// Keys of the springs model only.
+const SPRINGS: &[&str] = &["stretch_stiffness", "shear_stiffness", "bend_stiffness"];
+/// Keys of the shell model only.
+const SHELL: &[&str] = &["stretch_modulus", "poisson", "shear_modulus", "bending_rigidity"];
+
+/// The material of the table behind `k`.
+pub(super) fn material(k: &Keys) -> Result<Material> {
+    let preset = match k.has("material") {
+        true => Some(preset(k)?),
+        false => None,
+    };
+    let model = match k.has("model") {
+        false if preset.is_some() => ClothModel::Shell,
+        false => ClothModel::Springs,
+        true => match k.string("model")? {
+            "springs" => ClothModel::Springs,
+            "shell" => ClothModel::Shell,
+            other => {
+                return Err(k.error(
+                    "model",
+                    format!("unknown cloth model '{other}' (expected \"springs\" or \"shell\")"),
+                ));
+            }
+        },
+    };
+    let (foreign, name) = match model {
+        ClothModel::Springs => (SHELL, "shell"),
+        ClothModel::Shell => (SPRINGS, "springs"),
+    };
+    if let Some(key) = foreign.iter().find(|key| k.has(key)) {
+        return Err(k.error(
+            key,
+            format!("is a key of model = \"{name}\"; this cloth's model is the other one"),
+        ));
+    }
+    if model == ClothModel::Springs && preset.is_some() {
+        return Err(k.error(
+            "material",
+            "fabric presets set the shell model's keys: use model = \"shell\" (or leave model out)",
+        ));
+    }
+    let base = preset.unwrap_or_default();
+    let mass = match (k.opt_number("vertex_mass")?, k.opt_number("density")?) {
+        (Some(m), None) => MassSpec::PerVertex(m),
+        (None, Some(d)) => MassSpec::Density(d),
+        (None, None) if preset.is_some() => base.mass,
+        (Some(_), Some(_)) => {
+            return Err(k.error(
+                "density",
+                "give either vertex_mass (kg per vertex) or density (kg/m²), not both",
+            ));
+        }
+        (None, None) => {
+            return Err(k.error(
+                "density",
+                "missing: give vertex_mass (kg per vertex) or density (kg/m²)",
+            ));
+        }
+    };
+    let or = |key: &str, default: f64| Ok::<f64, crate::Error>(k.opt_number(key)?.unwrap_or(default));
+    let d = Material::default();
+    let mut m = Material {
+        stretch_stiffness: or("stretch_stiffness", d.stretch_stiffness)?,
+        shear_stiffness: or("shear_stiffness", d.shear_stiffness)?,
+        bend_stiffness: or("bend_stiffness", d.bend_stiffness)?,
+        damping: or("damping", d.damping)?,
+        air_drag: or("air_drag", d.air_drag)?,
+        mass,
+        model,
+        shell: base.shell,
+        strain_limit: k.opt_number("strain_limit")?,
+        pressure: or("pressure", d.pressure)?,
+    };
+    if model == ClothModel::Shell {
+        let s = &mut m.shell;
+        s.stretch_modulus = k.opt_pair("stretch_modulus")?.unwrap_or(s.stretch_modulus);
+        s.poisson = or("poisson", s.poisson)?;
+        if let Some(g) = k.opt_number("shear_modulus")? {
+            s.shear_modulus = Some(g);
+        }
+        s.bending_rigidity = k.opt_pair("bending_rigidity")?.unwrap_or(s.bending_rigidity);
+        s.damping = or("damping", s.damping)?;
+        m.damping = 0.0;
+    }
+    Ok(m)
+}
+
+/// The preset named by `material`, as a shell material (mass by density).
+fn preset(k: &Keys) -> Result<Material> {
+    let name = k.string("material")?;
+    let Some(f) = crate::textile::fabrics::fabric(name) else {
+        return Err(k.error(
+            "material",
+            format!(
+                "unknown fabric '{name}' (expected one of {})",
+                crate::textile::fabrics::FABRICS.join(", ")
+            ),
+        ));
+    };
+    Ok(Material {
+        mass: MassSpec::Density(f.density),
+        model: ClothModel::Shell,
+        shell: Shell {
+            stretch_modulus: f.stretch_modulus,
+            poisson: f.poisson,
+            shear_modulus: Some(f.shear_modulus),
+            bending_rigidity: f.bending_rigidity,
+            damping: f.damping,
+        },
+        ..Material::default()
+    })
+}
