@@ -843,6 +843,36 @@ mod tests {
         }
     }
 
+    /// A triangle compressed to half its size: `S` is negative definite, the exact Hessian
+    /// has negative eigenvalues, the matrix is its projection (positive semi-definite, not
+    /// `-H`).
+    #[test]
+    fn a_compressed_triangle_gets_a_projected_matrix() {
+        let law = MembraneLaw {
+            stretch_modulus: [200.0, 100.0],
+            poisson: 0.2,
+            shear_modulus: 30.0,
+        };
+        let p = [Vec3::ZERO, Vec3::X, Vec3::new(0.3, 0.9, 0.0)];
+        let tri = vec![[0u32, 1, 2]];
+        let m = Membrane::new(tri.clone(), material_coordinates(&p, &tri, None), law, 0.0);
+        let x: Vec<Vec3> = p.iter().map(|p| 0.5 * *p).collect();
+        let [a, _, c] = m.strain(&m.elements[0], &x).s;
+        assert!(a < 0.0 && c < 0.0);
+        let dense = |b: [[Mat3; 3]; 3]| -> [[f64; 9]; 9] {
+            std::array::from_fn(|i| std::array::from_fn(|j| b[i / 3][j / 3].col(j % 3)[i % 3]))
+        };
+        let exact = dense(m.exact_hessian(0, &x));
+        let (mu, _) = symmetric_eigen(&exact);
+        assert!(mu.iter().any(|&l| l < -1.0), "{mu:?}");
+        let v = vec![Vec3::ZERO; 3];
+        let minus_k = dense(m.local_jacobian(0, &at(&x, &v), -1.0, 0.0));
+        let (lambda, _) = symmetric_eigen(&minus_k);
+        assert!(lambda.iter().all(|&l| l > -1e-10), "{lambda:?}");
+        let differs = (0..9).any(|i| (0..9).any(|j| (exact[i][j] - minus_k[i][j]).abs() > 1.0));
+        assert!(differs);
+    }
+
     fn edge_lengths(r: &[[f64; 2]; 3]) -> [f64; 3] {
         let d = |a: [f64; 2], b: [f64; 2]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
         [d(r[0], r[1]), d(r[1], r[2]), d(r[2], r[0])]
