@@ -12,6 +12,7 @@
 pub mod damping;
 pub mod drag;
 pub mod gravity;
+pub mod hinge;
 pub mod repulsion;
 pub mod spring;
 pub mod stencil;
