@@ -12,8 +12,10 @@
 pub mod damping;
 pub mod drag;
 pub mod gravity;
+pub mod hinge;
 pub mod membrane;
 pub mod repulsion;
+pub mod shell;
 pub mod spring;
 pub mod stencil;
 pub mod stitch;
