@@ -1,0 +1,8 @@
+//! Textiles in physical units: fabric presets with their published sources ([`fabrics`]),
+//! the heavy elastica of the cantilever stiffness test ([`elastica`]) and the Cusick drape
+//! coefficient of a draped disc ([`drape`]). `docs/MATERIALS.md` gives the sources, the unit
+//! conversions and the definitions.
+
+pub mod elastica;
+
+pub use elastica::{Cantilever, cantilever};
