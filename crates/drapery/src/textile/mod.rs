@@ -3,6 +3,8 @@
 //! coefficient of a draped disc ([`drape`]). `docs/MATERIALS.md` gives the sources, the unit
 //! conversions and the definitions.
 
+pub mod drape;
 pub mod elastica;
 
+pub use drape::{disc, drape_coefficient};
 pub use elastica::{Cantilever, cantilever};
