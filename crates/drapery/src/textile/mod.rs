@@ -5,6 +5,8 @@
 
 pub mod drape;
 pub mod elastica;
+pub mod fabrics;
 
 pub use drape::{disc, drape_coefficient};
 pub use elastica::{Cantilever, cantilever};
+pub use fabrics::{FABRICS, Fabric, fabric};
