@@ -79,8 +79,9 @@ pub const UNAVAILABLE: &[(&str, &str)] = &[
     ),
     (
         "wool",
-        "no wool in Wang et al. (2011); no source read gives its stretch, shear and bending \
-         constants",
+        "no wool in Wang et al. (2011); Matsudaira et al. (2015), read second-hand, give one \
+         wool's bending rigidity, mass and drape coefficient but no tensile or shear data \
+         (docs/MATERIALS.md §2.7)",
     ),
     (
         "leather",
