@@ -38,6 +38,7 @@ pub mod scene;
 pub mod snapshot;
 pub mod stats;
 pub mod step;
+pub mod textile;
 pub mod validate;
 
 pub use error::{Error, Result};
