@@ -59,12 +59,12 @@ pub enum ClothModel {
 pub struct Shell {
     /// Stretch modulus (Young's modulus times thickness), N/m, along `[warp, weft]`.
     pub stretch_modulus: [f64; 2],
-    /// Poisson's ratio (warp strain from weft stress).
+    /// Poisson's ratio: weft strain from warp stress (`ν₁₂` of docs/MATH.md §20).
     pub poisson: f64,
     /// In-plane shear modulus, N/m (`None`: the isotropic value from the stretch moduli and
     /// Poisson's ratio).
     pub shear_modulus: Option<f64>,
-    /// Bending rigidity, N·m, for bending about `[warp, weft]`... see docs/MATERIALS.md.
+    /// Bending rigidity, N·m, of a strip cut along `[warp, weft]` (docs/MATERIALS.md).
     pub bending_rigidity: [f64; 2],
     /// Stiffness-proportional damping, s (the damping force is `-damping · H v`, `H` the
     /// elastic Hessian).
@@ -112,14 +112,15 @@ fn validate_shell(s: &Shell, field: &dyn Fn(&str) -> String) -> Result<()> {
     if let Some(g) = s.shear_modulus {
         validate::positive(&field("shear_modulus"), g)?;
     }
-    let nu = validate::nonneg(&field("poisson"), s.poisson)?;
-    // ν₁₂ ν₂₁ = ν² E₂/E₁ < 1 keeps the plane-stress law positive definite
+    // ν₁₂ ν₂₁ = ν² E₂/E₁ < 1 keeps the plane-stress law positive definite (a knit's ν may be
+    // negative)
+    let nu = s.poisson;
     let [y1, y2] = s.stretch_modulus;
-    if !(nu < 1.0 && nu * nu * y2 / y1 < 1.0) {
+    if !(nu.is_finite() && nu * nu * y2 / y1 < 1.0) {
         return Err(Error::field(
             field("poisson"),
             format!(
-                "must be < 1 with poisson² × weft/warp modulus < 1 (a positive definite law), got {nu} with moduli [{y1}, {y2}]"
+                "must be finite with poisson² × weft/warp modulus < 1 (a positive definite law), got {nu} with moduli [{y1}, {y2}]"
             ),
         ));
     }

@@ -32,13 +32,7 @@ pub fn forces(model: &Model) -> Vec<Box<dyn Force>> {
         let triangles = c.mesh.triangles();
         let coords = frames(c, &triangles);
         let o = c.offset as u32;
-        let global = |t: &[u32]| t.iter().map(|&i| i + o);
-        let membrane_triangles = (triangles.iter())
-            .map(|t| {
-                let mut g = global(t);
-                std::array::from_fn(|_| g.next().unwrap_or(0))
-            })
-            .collect();
+        let membrane_triangles = triangles.iter().map(|t| t.map(|i| i + o)).collect();
         out.push(Box::new(Membrane::new(
             membrane_triangles,
             coords.clone(),

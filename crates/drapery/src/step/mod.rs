@@ -528,6 +528,7 @@ fn model_forces(model: &Model, settings: &SolverSettings) -> Vec<Box<dyn Force>>
             sums: Default::default(),
         }));
     }
+    forces.extend(crate::forces::shell::forces(model));
     if !model.stitches.is_empty() {
         let st = &model.stitches;
         forces.push(Box::new(Stitches {

@@ -192,7 +192,8 @@ fn convert(m: &Measured, name: &'static str) -> Fabric {
         name,
         density: m.density,
         stretch_modulus: [2.0 * (s0 - s1 * s1 / s2), 2.0 * (s2 - s1 * s1 / s0)],
-        poisson: s1 / s0,
+        // weft strain from warp stress, the convention of model::Shell and the membrane
+        poisson: s1 / s2,
         shear_modulus: s3,
         // strips along u bend about hinges along v (d90), strips along v about u (d0)
         bending_rigidity: [m.bend[2], m.bend[0]],
@@ -246,15 +247,22 @@ mod tests {
 
     #[test]
     fn the_moduli_reproduce_the_measured_stiffness() {
-        // plane stress with E_u, E_v, ν_vu = ν and ν_uv = ν E_u / E_v gives
-        // C = 1/(1 − ν_uv ν_vu) [[E_u, ν_vu E_u], [ν_vu E_u, E_v]] = 2 [[s0, s1], [s1, s2]]
+        // plane stress with E_u, E_v and ν = ν_uv (weft strain from warp stress, as the
+        // membrane has it), ν_vu = ν E_v / E_u, gives
+        // C = 1/(1 − ν_uv ν_vu) [[E_u, ν E_v], [ν E_v, E_v]] = 2 [[s0, s1], [s1, s2]]
         for m in MEASURED {
             let f = convert(m, m.name);
             let [eu, ev] = f.stretch_modulus;
-            let nu_vu = f.poisson;
-            let nu_uv = nu_vu * eu / ev;
-            let d = 1.0 - nu_uv * nu_vu;
-            let c = [eu / d, nu_vu * eu / d, ev / d];
+            let nu = f.poisson;
+            let d = 1.0 - nu * nu * ev / eu;
+            let c = [eu / d, nu * ev / d, ev / d];
+            // the membrane's own constants agree
+            let law = crate::forces::membrane::MembraneLaw {
+                stretch_modulus: f.stretch_modulus,
+                poisson: nu,
+                shear_modulus: f.shear_modulus,
+            };
+            assert!(law.is_stable(), "{}", m.name);
             let k = [2.0 * m.stretch[0], 2.0 * m.stretch[1], 2.0 * m.stretch[2]];
             for i in 0..3 {
                 assert!(
@@ -277,7 +285,7 @@ mod tests {
             let [eu, ev] = f.stretch_modulus;
             // positive definite plane-stress stiffness: E > 0, G > 0, ν_uv ν_vu < 1
             assert!(eu > 0.0 && ev > 0.0 && f.shear_modulus > 0.0, "{name}");
-            assert!(f.poisson * f.poisson * eu / ev < 1.0, "{name}");
+            assert!(f.poisson * f.poisson * ev / eu < 1.0, "{name}");
             assert!(f.bending_rigidity.iter().all(|&b| b > 0.0));
             // fabrics of 100-350 g/m²
             assert!((0.1..0.35).contains(&f.density), "{name}");
