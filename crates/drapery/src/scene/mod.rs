@@ -73,6 +73,7 @@ mod collider;
 mod garment;
 mod handle;
 mod stitch;
+mod wind;
 
 /// Relative tolerance for "whole number" checks on steps per frame and frame counts.
 pub const WHOLE_TOLERANCE: f64 = 1e-6;
@@ -107,6 +108,8 @@ pub struct Scene {
     pub obstacles: Vec<Obstacle>,
     /// The `[[stitch]]`es, in file order.
     pub stitches: Vec<StitchDesc>,
+    /// The `[[wind]]`s, in file order (their air velocities add; none: no air force).
+    pub wind: Vec<crate::forces::Wind>,
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -127,6 +130,8 @@ struct SceneFile {
     stitch: Vec<toml::Table>,
     #[serde(default)]
     garment: Vec<toml::Table>,
+    #[serde(default)]
+    wind: Vec<toml::Table>,
 }
 
 #[derive(Deserialize)]
@@ -178,6 +183,7 @@ struct ClothTable {
     bend_stiffness: Option<f64>,
     damping: Option<f64>,
     air_drag: Option<f64>,
+    pressure: Option<f64>,
     #[serde(default)]
     pin: Vec<u32>,
     initial_velocity: Option<[f64; 3]>,
@@ -380,6 +386,7 @@ impl Scene {
                 bend_stiffness: c.bend_stiffness.unwrap_or(d.bend_stiffness),
                 damping: c.damping.unwrap_or(d.damping),
                 air_drag: c.air_drag.unwrap_or(d.air_drag),
+                pressure: c.pressure.unwrap_or(d.pressure),
                 mass,
                 ..Default::default()
             };
@@ -420,6 +427,10 @@ impl Scene {
             cloths.extend(c);
             stitches.extend(s);
         }
+        let winds = (file.wind.iter().enumerate())
+            .map(|(i, t)| wind::wind(i, t, dir))
+            .collect::<Result<Vec<_>>>()
+            .map_err(located)?;
         if collision.is_none() && !obstacles.is_empty() {
             collision = Some(CollisionSettings::default());
         }
@@ -435,6 +446,7 @@ impl Scene {
             collision,
             obstacles,
             stitches,
+            wind: winds,
         };
         // Whatever the model itself rejects (cloth names, materials, pins, density on vertices
         // that belong to no face) is reported now, before anything is simulated or written.
@@ -471,7 +483,9 @@ impl Scene {
 
     /// The model, with the model's own errors.
     fn unchecked_model(&self) -> Result<Model> {
-        let mut m = Model::new(self.cloths.clone(), self.gravity)?.with_stitches(&self.stitches)?;
+        let mut m = Model::new(self.cloths.clone(), self.gravity)?
+            .with_stitches(&self.stitches)?
+            .with_wind(&self.wind)?;
         m.collision = self.collision;
         m.obstacles = self.obstacles.clone();
         Ok(m)
