@@ -287,8 +287,8 @@ impl StencilForce for WindForce {
 
 #[cfg(test)]
 mod tests {
-    use super::super::Force;
     use super::super::testing::*;
+    use super::super::{Force, Linearization};
     use super::*;
     use proptest::prelude::*;
 
@@ -346,6 +346,8 @@ mod tests {
                 }
             }
             prop_assert!(check_product(&f, &x, &v, 0.7, 1.3, &v) < 1e-12);
+            let lin = Linearization { t: T, x: &x, v: &v, matrix: (0.7, 1.3), product: (1.3, 0.7), w: &x };
+            prop_assert!(linearization_is_bitwise_separate(&f, &lin, &v));
             let mut dvw = vec![Vec3::ZERO; 4];
             f.add_jacobian_product(&at(&x, &v), 0.0, 1.0, &x, &mut dvw);
             let q: f64 = x.iter().zip(&dvw).map(|(a, b)| a.dot(*b)).sum();

@@ -127,6 +127,55 @@ mod tests {
         );
     }
 
+    /// Wind and pressure (on an open sheet: a sail) step to the same bits on 1 and 2 threads.
+    #[test]
+    fn wind_and_pressure_give_the_same_bits_on_any_number_of_threads() {
+        let text = scene(
+            0.1,
+            "[0, -9.81, 0]",
+            0.2,
+            "[[wind]]\nkeyframes = [{ time = 0, velocity = [1, 0, 0] }, { time = 0.1, velocity = [0, 3, 1] }]\n",
+        )
+        .replace("bend_stiffness = 0\n", "bend_stiffness = 0\npressure = 20\n");
+        let scene = Scene::from_str(&text, Path::new("s.toml")).unwrap();
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut sim = scene.start().unwrap();
+                for _ in 0..scene.step_count() {
+                    sim.step(scene.step_size()).unwrap();
+                }
+                let names: Vec<&str> = sim.forces().iter().map(|f| f.name()).collect();
+                assert!(names.contains(&"wind") && names.contains(&"pressure"));
+                (sim.positions().iter().chain(sim.velocities()))
+                    .flat_map(|p| p.to_array().map(f64::to_bits))
+                    .collect::<Vec<_>>()
+            })
+        };
+        let one = run(1);
+        assert_eq!(one, run(2));
+        assert_ne!(one, run_plain(&scene));
+    }
+
+    /// The scene's bits without its winds and pressure.
+    fn run_plain(scene: &Scene) -> Vec<u64> {
+        let mut plain = scene.clone();
+        plain.wind.clear();
+        for c in &mut plain.cloths {
+            c.material.pressure = 0.0;
+        }
+        let mut sim = plain.start().unwrap();
+        for _ in 0..plain.step_count() {
+            sim.step(plain.step_size()).unwrap();
+        }
+        (sim.positions().iter().chain(sim.velocities()))
+            .flat_map(|p| p.to_array().map(f64::to_bits))
+            .collect()
+    }
+
     #[test]
     fn no_wind_table_means_no_air_force() {
         let path = Path::new("s.toml");
