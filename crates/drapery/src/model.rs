@@ -253,6 +253,10 @@ pub struct Model {
     pub(crate) handles: Vec<crate::constraints::handles::Handle>,
     /// Stitched particle pairs (see [`Model::with_stitches`]).
     pub(crate) stitches: Vec<Stitch>,
+    /// Pressure inside each cloth, Pa (0: none), in cloth order.
+    pub(crate) pressure: Vec<f64>,
+    /// The winds, whose air velocities add (see [`Model::with_wind`]).
+    pub(crate) wind: Vec<crate::forces::Wind>,
 }
 
 /// One side of a stitch: a cloth by name and vertices of its mesh, in order.
@@ -346,6 +350,8 @@ impl Model {
             cloths: Vec::new(),
             collision: None,
             obstacles: Vec::new(),
+            pressure: Vec::new(),
+            wind: Vec::new(),
         };
         for c in cloths {
             m.add_cloth(c)?;
@@ -427,6 +433,12 @@ impl Model {
         validate::nonneg(&field("damping"), mat.damping)?;
         validate::nonneg(&field("air_drag"), mat.air_drag)?;
         validate::finite3(&field("initial_velocity"), c.initial_velocity)?;
+        if !mat.pressure.is_finite() {
+            return Err(Error::field(
+                field("pressure"),
+                format!("must be a finite number, got {}", mat.pressure),
+            ));
+        }
         if mat.model == ClothModel::Shell {
             validate_shell(&mat.shell, &field)?;
             if c.mesh.faces.is_empty() {
@@ -533,6 +545,7 @@ impl Model {
         self.mass.extend(masses);
         self.pinned.extend(pinned);
         self.drag.extend(std::iter::repeat_n(mat.air_drag, n));
+        self.pressure.push(mat.pressure);
         self.cloths.push(ClothInfo {
             name: c.name,
             offset,
@@ -540,6 +553,27 @@ impl Model {
             material: c.material,
         });
         Ok(())
+    }
+
+    /// The model with `winds` (checked: each one, and that they share density and drag).
+    pub fn with_wind(mut self, winds: &[crate::forces::Wind]) -> Result<Model> {
+        crate::forces::wind::validate_winds(winds)?;
+        self.wind = winds.to_vec();
+        Ok(self)
+    }
+
+    /// The triangles of every cloth under pressure and each one's pressure, Pa.
+    pub(crate) fn pressure_triangles(&self) -> (Vec<[u32; 3]>, Vec<f64>) {
+        let mut out = (Vec::new(), Vec::new());
+        for (c, &p) in self.cloths.iter().zip(&self.pressure) {
+            if p != 0.0 {
+                for t in c.mesh.triangles() {
+                    out.0.push(t.map(|i| i + c.offset as u32));
+                    out.1.push(p);
+                }
+            }
+        }
+        out
     }
 
     /// Every cloth triangle (quads split), in global particle indices.

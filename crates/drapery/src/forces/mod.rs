@@ -14,18 +14,22 @@ pub mod drag;
 pub mod gravity;
 pub mod hinge;
 pub mod membrane;
+pub mod pressure;
 pub mod repulsion;
 pub mod shell;
 pub mod spring;
 pub mod stencil;
 pub mod stitch;
+pub mod wind;
 
 pub use damping::SpringDamping;
 pub use drag::AirDrag;
 pub use gravity::Gravity;
+pub use pressure::Pressure;
 pub use repulsion::Repulsions;
 pub use spring::Springs;
 pub use stitch::Stitches;
+pub use wind::{Wind, WindForce};
 
 use crate::linalg::BlockMatrix;
 use crate::math::Vec3;

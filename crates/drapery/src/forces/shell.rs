@@ -41,9 +41,19 @@ pub fn forces(model: &Model) -> Vec<Box<dyn Force>> {
         )));
         if s.bending_rigidity.iter().any(|&b| b > 0.0) {
             let hinges = interior_edges(&triangles);
-            let rigidity = (hinges.iter())
-                .map(|(h, [t, _])| {
-                    rigidity_across(edge_in_frame(&triangles[*t], &coords[*t], [h[0], h[1]]), s.bending_rigidity)
+            let x = &c.mesh.positions;
+            let area = |t: &[u32; 3]| {
+                let [a, b, d] = t.map(|i| x[i as usize]);
+                0.5 * (b - a).cross(d - a).length()
+            };
+            let pinned = &model.pinned[c.range()];
+            let rigid = |t: &[u32; 3]| t.iter().all(|&i| pinned[i as usize]);
+            let rigidity: Vec<f64> = (hinges.iter())
+                .map(|(h, [ti, ui])| {
+                    let (t, u) = (&triangles[*ti], &triangles[*ui]);
+                    let edge = edge_in_frame(t, &coords[*ti], [h[0], h[1]]);
+                    rigidity_across(edge, s.bending_rigidity)
+                        * clamp_factor([area(t), area(u)], [rigid(t), rigid(u)])
                 })
                 .collect();
             let stencils = (hinges.iter())
@@ -83,6 +93,21 @@ fn frames(c: &ClothInfo, triangles: &[[u32; 3]]) -> Vec<[[f64; 2]; 3]> {
             material_coordinates(&corners, &own, Some(&corner_uv))
         }
         None => material_coordinates(x, triangles, None),
+    }
+}
+
+/// The factor on a hinge's rigidity when a wing is held rigid (all three of its vertices
+/// pinned: a clamp). Its bend then happens over the free wing alone: the angle is spread over
+/// the free wing's height instead of both (`|e| κ ∝ θ |e|² / A_free`) and acts on the free
+/// wing's area only, so the weight `|e|²/(A₁ + A₂)` becomes `|e|²/A_free` (docs/MATH.md §21,
+/// clamped edges). Without this the clamp of a cantilever would reach half a cell into the
+/// free strip, an error of the order of the edge length.
+fn clamp_factor(area: [f64; 2], rigid: [bool; 2]) -> f64 {
+    match rigid {
+        [false, false] => 1.0,
+        [true, true] => 0.0,
+        [true, false] => (area[0] + area[1]) / area[1],
+        [false, true] => (area[0] + area[1]) / area[0],
     }
 }
 

@@ -166,3 +166,30 @@ pub fn linearization_is_bitwise_separate(
         && same_bits(vecs(&out0), vecs(&out1))
         && same_bits(mats(&m0), mats(&m1))
 }
+
+/// Dense matrix of `n` particles from 3-particle stencils' blocks (`[i][j]` = row `i`,
+/// column `j` of the stencil), summed.
+pub fn dense_blocks(
+    n: usize,
+    stencils: impl Iterator<Item = ([u32; 3], [[Mat3; 3]; 3])>,
+) -> Vec<Vec<f64>> {
+    let mut out = vec![vec![0.0; 3 * n]; 3 * n];
+    for (p, blocks) in stencils {
+        for (i, &pi) in p.iter().enumerate() {
+            for (j, &pj) in p.iter().enumerate() {
+                for r in 0..3 {
+                    for c in 0..3 {
+                        out[3 * pi as usize + r][3 * pj as usize + c] += blocks[i][j].col(c)[r];
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// A vector with components in `(-r, r)`.
+pub fn arb_vec3(r: f64) -> impl proptest::strategy::Strategy<Value = Vec3> {
+    use proptest::strategy::Strategy;
+    (-r..r, -r..r, -r..r).prop_map(|(a, b, c)| Vec3::new(a, b, c))
+}

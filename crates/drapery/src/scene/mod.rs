@@ -75,6 +75,7 @@ mod garment;
 mod handle;
 mod material;
 mod stitch;
+mod wind;
 
 /// Relative tolerance for "whole number" checks on steps per frame and frame counts.
 pub const WHOLE_TOLERANCE: f64 = 1e-6;
@@ -109,6 +110,8 @@ pub struct Scene {
     pub obstacles: Vec<Obstacle>,
     /// The `[[stitch]]`es, in file order.
     pub stitches: Vec<StitchDesc>,
+    /// The `[[wind]]`s, in file order (their air velocities add; none: no air force).
+    pub wind: Vec<crate::forces::Wind>,
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -129,6 +132,8 @@ struct SceneFile {
     stitch: Vec<toml::Table>,
     #[serde(default)]
     garment: Vec<toml::Table>,
+    #[serde(default)]
+    wind: Vec<toml::Table>,
 }
 
 #[derive(Deserialize)]
@@ -401,6 +406,10 @@ impl Scene {
             cloths.extend(c);
             stitches.extend(s);
         }
+        let winds = (file.wind.iter().enumerate())
+            .map(|(i, t)| wind::wind(i, t, dir))
+            .collect::<Result<Vec<_>>>()
+            .map_err(located)?;
         if collision.is_none() && !obstacles.is_empty() {
             collision = Some(CollisionSettings::default());
         }
@@ -416,6 +425,7 @@ impl Scene {
             collision,
             obstacles,
             stitches,
+            wind: winds,
         };
         // Whatever the model itself rejects (cloth names, materials, pins, density on vertices
         // that belong to no face) is reported now, before anything is simulated or written.
@@ -452,7 +462,9 @@ impl Scene {
 
     /// The model, with the model's own errors.
     fn unchecked_model(&self) -> Result<Model> {
-        let mut m = Model::new(self.cloths.clone(), self.gravity)?.with_stitches(&self.stitches)?;
+        let mut m = Model::new(self.cloths.clone(), self.gravity)?
+            .with_stitches(&self.stitches)?
+            .with_wind(&self.wind)?;
         m.collision = self.collision;
         m.obstacles = self.obstacles.clone();
         Ok(m)

@@ -42,7 +42,8 @@ use crate::collision::seams::Seams;
 use crate::constraints::obstacle::ActiveSet;
 use crate::error::Result;
 use crate::forces::{
-    AirDrag, Force, Gravity, Linearization, SpringDamping, Springs, State, Stitches,
+    AirDrag, Force, Gravity, Linearization, Pressure, SpringDamping, Springs, State, Stitches,
+    WindForce,
 };
 use crate::linalg::BlockMatrix;
 use crate::linalg::pcg::Preconditioner;
@@ -274,11 +275,13 @@ impl Simulation {
         let t = std::time::Instant::now();
         let energies = guard::Energies {
             ke0: start.ke0,
-            surface_speed: pose.surface_speed,
+            // the air, like a moving obstacle, can bring the cloth to its speed
+            surface_speed: (pose.surface_speed)
+                .max(crate::forces::wind::speed_bound(&self.model.wind)),
             h,
         };
         if let Some(why) = guard::blow_up(&self.model, &v, &energies, || {
-            potential.stored_energy(&start.x0)
+            potential.stored_energy(&start.x0) + pressure_allowance(&self.model, &start.x0, h)
         }) {
             return Err(at.fail(why));
         }
@@ -504,6 +507,27 @@ fn checked<'a, T>(
 
 /// The forces of a model: gravity, then springs and spring damping (the springs with a
 /// nonzero coefficient), then the stitches if any, then air drag if any particle has it.
+/// What pressure adds to the blow-up test's stored energy (docs/MATH.md §23): in place of its
+/// energy `-pV` (negative, and no potential at all on an open cloth), the kinetic energy its
+/// impulse over one step gives from rest, `Σ |h f_i|² / (2 m_i)`.
+fn pressure_allowance(model: &Model, x: &[Vec3], h: f64) -> f64 {
+    let (triangles, p) = model.pressure_triangles();
+    if triangles.is_empty() {
+        return 0.0;
+    }
+    let force = Pressure {
+        triangles,
+        p,
+        sums: Default::default(),
+    };
+    let mut f = vec![Vec3::ZERO; x.len()];
+    force.add_force(&State { t: 0.0, x, v: x }, &mut f);
+    let impulse: f64 = (f.iter().zip(&model.mass))
+        .map(|(f, m)| (h * *f).length_squared() / (2.0 * m))
+        .sum();
+    impulse - force.energy(0.0, x)
+}
+
 fn model_forces(model: &Model, settings: &SolverSettings) -> Vec<Box<dyn Force>> {
     let s = &model.springs;
     let stiff: Vec<usize> = (0..s.len()).filter(|&k| s.stiffness[k] > 0.0).collect();
@@ -542,6 +566,20 @@ fn model_forces(model: &Model, settings: &SolverSettings) -> Vec<Box<dyn Force>>
     if model.drag.iter().any(|&c| c > 0.0) {
         forces.push(Box::new(AirDrag {
             c: model.drag.clone(),
+        }));
+    }
+    if !model.wind.is_empty() {
+        forces.push(Box::new(WindForce::new(
+            model.triangles(),
+            model.wind.clone(),
+        )));
+    }
+    let (triangles, p) = model.pressure_triangles();
+    if !triangles.is_empty() {
+        forces.push(Box::new(Pressure {
+            triangles,
+            p,
+            sums: Default::default(),
         }));
     }
     forces

@@ -10,4 +10,5 @@ mod pcg_breakdowns;
 mod sequences;
 mod solvers;
 mod step_failures;
+mod textile;
 mod three_particles;
