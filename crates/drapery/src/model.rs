@@ -224,6 +224,8 @@ pub struct Model {
     pub(crate) handles: Vec<crate::constraints::handles::Handle>,
     /// Stitched particle pairs (see [`Model::with_stitches`]).
     pub(crate) stitches: Vec<Stitch>,
+    /// Each cloth's strain limit ([`Material::strain_limit`]), in cloth order.
+    pub(crate) strain_limits: Vec<Option<f64>>,
 }
 
 /// One side of a stitch: a cloth by name and vertices of its mesh, in order.
@@ -311,6 +313,7 @@ impl Model {
             pinned: Vec::new(),
             handles: Vec::new(),
             stitches: Vec::new(),
+            strain_limits: Vec::new(),
             drag: Vec::new(),
             springs: Springs::default(),
             gravity,
@@ -398,6 +401,9 @@ impl Model {
         validate::nonneg(&field("damping"), mat.damping)?;
         validate::nonneg(&field("air_drag"), mat.air_drag)?;
         validate::finite3(&field("initial_velocity"), c.initial_velocity)?;
+        if let Some(limit) = mat.strain_limit {
+            validate::positive(&field("strain_limit"), limit)?;
+        }
         let n = c.mesh.positions.len();
         let masses: Vec<f64> = match mat.mass {
             MassSpec::PerVertex(mv) => {
@@ -483,6 +489,7 @@ impl Model {
         self.mass.extend(masses);
         self.pinned.extend(pinned);
         self.drag.extend(std::iter::repeat_n(mat.air_drag, n));
+        self.strain_limits.push(mat.strain_limit);
         self.cloths.push(ClothInfo {
             name: c.name,
             offset,
@@ -698,6 +705,11 @@ impl Model {
     /// The cloths, in order, each with its particle range and mesh.
     pub fn cloths(&self) -> &[ClothInfo] {
         &self.cloths
+    }
+
+    /// Each cloth's strain limit, in the order of [`Model::cloths`] (`None`: no limit).
+    pub fn strain_limits(&self) -> &[Option<f64>] {
+        &self.strain_limits
     }
 
     /// The cloth named `name`.

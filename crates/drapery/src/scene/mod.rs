@@ -178,6 +178,7 @@ struct ClothTable {
     bend_stiffness: Option<f64>,
     damping: Option<f64>,
     air_drag: Option<f64>,
+    strain_limit: Option<f64>,
     #[serde(default)]
     pin: Vec<u32>,
     initial_velocity: Option<[f64; 3]>,
@@ -380,6 +381,7 @@ impl Scene {
                 bend_stiffness: c.bend_stiffness.unwrap_or(d.bend_stiffness),
                 damping: c.damping.unwrap_or(d.damping),
                 air_drag: c.air_drag.unwrap_or(d.air_drag),
+                strain_limit: c.strain_limit,
                 mass,
                 ..Default::default()
             };
