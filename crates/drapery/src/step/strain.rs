@@ -87,7 +87,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(24))]
+        #![proptest_config(ProptestConfig::with_cases(64))]
 
         /// After every step, no edge of a strain-limited cloth is longer than its bound, however
         /// fast the cloth moves and however large the step.
