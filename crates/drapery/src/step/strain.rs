@@ -276,4 +276,46 @@ pin = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10]
         .to_string();
         assert!(e.contains("line 10") && e.contains("strain_limit"), "{e}");
     }
+
+    #[test]
+    fn a_handle_pulling_the_cloth_past_its_limit_is_counted_not_fought() {
+        use crate::animation::Motion;
+        use crate::constraints::handles::HandleDesc;
+        // the top row, 4 edges of 0.1 m, from a pinned corner to a handle moving away at 1 m/s:
+        // once the two are more than 4 × 0.105 m apart no position of the row meets its limit
+        let mut cloth = sheet(5, 0.4, 30.0, vec![0], Some(0.05));
+        cloth.handles.push(HandleDesc {
+            vertices: vec![4],
+            pivot: None,
+            motion: Motion::Constant {
+                velocity: Vec3::X,
+                angular_velocity: Vec3::ZERO,
+            },
+            release: None,
+            attach: None,
+        });
+        let m = Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0)).unwrap();
+        let (x0, x4) = (m.positions()[0], m.positions()[4]);
+        let mut sim = Simulation::new(m, SolverSettings::default()).unwrap();
+        let h = 0.01;
+        for k in 1..=10 {
+            let r = sim.step(h).unwrap();
+            let x = sim.positions();
+            assert_eq!(x[0], x0);
+            // the handle goes where its motion says, whatever the limit
+            assert!(
+                (x[4] - (x4 + Vec3::X * (k as f64 * h))).length() < 1e-12,
+                "step {k}"
+            );
+            let apart = (x[4] - x[0]).length();
+            // (at exactly 0.42 m the row must be straight at its bound: left out)
+            if apart > 0.42 * (1.0 + 1e-9) {
+                assert!(r.strain_over > 0, "step {k}: {apart}");
+            } else if apart < 0.42 * (1.0 - 1e-3) {
+                assert_eq!(r.strain_over, 0, "step {k}: {apart}");
+            }
+            assert!(x.iter().chain(sim.velocities()).all(|p| p.is_finite()));
+        }
+        assert!(sim.steps() == 10 && (sim.positions()[4] - sim.positions()[0]).length() > 0.45);
+    }
 }
