@@ -125,7 +125,7 @@ def test_the_last_report_has_the_step_reports_fields_and_stage_times(drape_path)
     assert r["obstacle_contacts"] >= 1
     assert 0 <= r["residual"] < 1e-5  # the scene's PCG tolerance is the default 1e-6
     stages = r["stages"]
-    names = ["guard", "pose", "detect", "linearize", "constrain", "solve", "update", "friction", "failsafe", "commit"]
+    names = ["guard", "pose", "detect", "linearize", "constrain", "solve", "update", "friction", "strain", "failsafe", "commit"]
     assert list(stages) == names + ["total"]
     assert all(stages[k] >= 0 for k in names)
     assert stages["total"] == pytest.approx(sum(stages[k] for k in names))

@@ -257,6 +257,8 @@ pub struct Model {
     pub(crate) pressure: Vec<f64>,
     /// The winds, whose air velocities add (see [`Model::with_wind`]).
     pub(crate) wind: Vec<crate::forces::Wind>,
+    /// Each cloth's strain limit ([`Material::strain_limit`]), in cloth order.
+    pub(crate) strain_limits: Vec<Option<f64>>,
 }
 
 /// One side of a stitch: a cloth by name and vertices of its mesh, in order.
@@ -344,6 +346,7 @@ impl Model {
             pinned: Vec::new(),
             handles: Vec::new(),
             stitches: Vec::new(),
+            strain_limits: Vec::new(),
             drag: Vec::new(),
             springs: Springs::default(),
             gravity,
@@ -433,6 +436,9 @@ impl Model {
         validate::nonneg(&field("damping"), mat.damping)?;
         validate::nonneg(&field("air_drag"), mat.air_drag)?;
         validate::finite3(&field("initial_velocity"), c.initial_velocity)?;
+        if let Some(limit) = mat.strain_limit {
+            validate::positive(&field("strain_limit"), limit)?;
+        }
         if !mat.pressure.is_finite() {
             return Err(Error::field(
                 field("pressure"),
@@ -546,6 +552,7 @@ impl Model {
         self.pinned.extend(pinned);
         self.drag.extend(std::iter::repeat_n(mat.air_drag, n));
         self.pressure.push(mat.pressure);
+        self.strain_limits.push(mat.strain_limit);
         self.cloths.push(ClothInfo {
             name: c.name,
             offset,
@@ -783,6 +790,11 @@ impl Model {
     /// The cloths, in order, each with its particle range and mesh.
     pub fn cloths(&self) -> &[ClothInfo] {
         &self.cloths
+    }
+
+    /// Each cloth's strain limit, in the order of [`Model::cloths`] (`None`: no limit).
+    pub fn strain_limits(&self) -> &[Option<f64>] {
+        &self.strain_limits
     }
 
     /// The cloth named `name`.

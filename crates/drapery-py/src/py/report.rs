@@ -18,6 +18,7 @@ pub fn report_dict<'py>(py: Python<'py>, r: &StepReport) -> PyResult<Bound<'py, 
     d.set_item("obstacle_contacts", r.obstacle_contacts)?;
     d.set_item("self_contacts", r.self_contacts)?;
     d.set_item("ccd_hits", r.ccd_hits)?;
+    d.set_item("strain_over", r.strain_over)?;
     let s = &r.stages;
     let stages = PyDict::new(py);
     for (name, t) in [
@@ -29,6 +30,7 @@ pub fn report_dict<'py>(py: Python<'py>, r: &StepReport) -> PyResult<Bound<'py, 
         ("solve", s.solve),
         ("update", s.update),
         ("friction", s.friction),
+        ("strain", s.strain),
         ("failsafe", s.failsafe),
         ("commit", s.commit),
         ("total", s.total()),

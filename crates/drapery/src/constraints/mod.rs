@@ -10,6 +10,7 @@
 pub mod handles;
 pub mod obstacle;
 pub mod pins;
+pub mod strain_limit;
 
 use crate::math::{Mat3, Vec3};
 

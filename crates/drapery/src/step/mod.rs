@@ -13,6 +13,7 @@
 //! | constrain, solve | [`solve`] | filter `S` and `z`, filtered PCG on the obstacle active set |
 //! | update | [`newton`] | new velocities and positions, line search with several iterations |
 //! | friction | [`friction`] | cloth–cloth, then obstacle friction |
+//! | strain | [`strain`] | over-long edges of strain-limited cloths shortened (momentum kept) |
 //! | failsafe | [`failsafe`] | continuous collision detection: nothing crosses anything |
 //! | commit | [`guard`] | energy blow-up test, warm start, time |
 //!
@@ -31,6 +32,7 @@ mod pose;
 pub mod report;
 pub mod settings;
 mod solve;
+mod strain;
 mod system;
 #[cfg(test)]
 mod testing;
@@ -40,6 +42,7 @@ pub use settings::{LinearSolver, SolverSettings};
 
 use crate::collision::seams::Seams;
 use crate::constraints::obstacle::ActiveSet;
+use crate::constraints::strain_limit::StrainLimits;
 use crate::error::Result;
 use crate::forces::{
     AirDrag, Force, Gravity, Linearization, Pressure, SpringDamping, Springs, State, Stitches,
@@ -77,6 +80,8 @@ pub struct Simulation {
     edges: Vec<[u32; 2]>,
     /// The stitched neighbourhoods exempt from cloth–cloth contact.
     seams: Seams,
+    /// The edges of the cloths that have a strain limit.
+    strain_limits: StrainLimits,
     work: Work,
     solvers: Solvers,
 }
@@ -108,6 +113,7 @@ impl Simulation {
         let initial = (model.x.clone(), model.v.clone());
         let stitched: Vec<[u32; 2]> = model.stitches.iter().map(|p| [p.a, p.b]).collect();
         let seams = Seams::new(n, &triangles, &stitched);
+        let strain_limits = StrainLimits::of(&model);
         Ok(Simulation {
             warm_start: vec![Vec3::ZERO; n],
             model,
@@ -120,6 +126,7 @@ impl Simulation {
             triangles,
             edges,
             seams,
+            strain_limits,
             work: Work::default(),
             solvers: Solvers::default(),
         })
@@ -256,6 +263,12 @@ impl Simulation {
                     &mut v,
                 )
             });
+        }
+        report.strain_over = timed(&mut report.stages.strain, || {
+            let (limits, mass) = (&self.strain_limits, &self.model.mass);
+            strain::run(limits, mass, &pose.pinned, h, &mut x, &mut v)
+        });
+        if let Some(c) = &self.model.collision {
             report.ccd_hits = timed(&mut report.stages.failsafe, || {
                 failsafe::run(
                     &self.model,

@@ -23,6 +23,8 @@ pub struct StageTimes {
     pub update: f64,
     /// Cloth–cloth and obstacle friction.
     pub friction: f64,
+    /// The strain limits' correction.
+    pub strain: f64,
     /// The continuous collision fail-safe.
     pub failsafe: f64,
     /// Blow-up test and warm start.
@@ -40,6 +42,7 @@ impl StageTimes {
             + self.solve
             + self.update
             + self.friction
+            + self.strain
             + self.failsafe
             + self.commit
     }
@@ -71,6 +74,9 @@ pub struct StepReport {
     pub self_contacts: usize,
     /// Pairs the continuous collision fail-safe had to stop.
     pub ccd_hits: usize,
+    /// Edges left longer than their strain limit allows: the correction's sweeps ran out
+    /// because pins or handles hold them apart (0 without strain limits).
+    pub strain_over: usize,
 }
 
 impl StepReport {
