@@ -35,6 +35,7 @@ pub fn validate(args: ValidateArgs) -> Result<()> {
             st.pinned,
             sig(st.mass),
         ));
+        out.push_str(&format!("  material: {}\n", c.material.describe()));
     }
     match model.collision() {
         None => out.push_str("collision: off\n"),

@@ -43,6 +43,64 @@ pub struct Material {
     pub pressure: f64,
 }
 
+impl Material {
+    /// One line for summaries: the model and its parameters, the strain limit and pressure.
+    pub fn describe(&self) -> String {
+        let pair = |p: [f64; 2]| match p[0] == p[1] {
+            true => sig4(p[0]),
+            false => format!("[{}, {}] (warp, weft)", sig4(p[0]), sig4(p[1])),
+        };
+        let mut out = match self.model {
+            ClothModel::Springs => format!(
+                "springs: stretch {} N/m, shear {} N/m, bend {} N/m, damping {} N·s/m",
+                self.stretch_stiffness, self.shear_stiffness, self.bend_stiffness, self.damping
+            ),
+            ClothModel::Shell => {
+                let s = &self.shell;
+                let shear = match s.shear_modulus {
+                    Some(g) => format!("{} N/m", sig4(g)),
+                    None => format!(
+                        "{} N/m (isotropic)",
+                        sig4(crate::forces::membrane::MembraneLaw::isotropic_shear(
+                            s.stretch_modulus,
+                            s.poisson
+                        ))
+                    ),
+                };
+                format!(
+                    "shell: stretch modulus {} N/m, poisson {}, shear modulus {shear}, bending rigidity {} N·m, damping {} s",
+                    pair(s.stretch_modulus),
+                    sig4(s.poisson),
+                    pair(s.bending_rigidity),
+                    s.damping
+                )
+            }
+        };
+        if let Some(l) = self.strain_limit {
+            out.push_str(&format!(", strain limit {l}"));
+        }
+        if self.pressure != 0.0 {
+            out.push_str(&format!(", pressure {} Pa", self.pressure));
+        }
+        out
+    }
+}
+
+/// `x` to 4 significant digits, trailing zeros dropped (`1e-5`, `85.74`, `0.0036`).
+fn sig4(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let digits = 3 - x.abs().log10().floor() as i32;
+    if (0..=6).contains(&digits) {
+        let t = format!("{x:.*}", digits as usize);
+        let t = if t.contains('.') { t.trim_end_matches('0').trim_end_matches('.') } else { &t };
+        t.to_string()
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
 /// Which forces resist a cloth's deformation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ClothModel {

@@ -152,3 +152,71 @@ fn preset(k: &Keys) -> Result<Material> {
         ..Material::default()
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::model::{ClothModel, MassSpec};
+    use crate::scene::Scene;
+    use crate::textile::fabrics::fabric;
+    use std::path::Path;
+
+    /// A scene whose cloth has the material keys `keys`.
+    fn cloth(keys: &str) -> crate::Result<Scene> {
+        let text = format!(
+            "[simulation]\nduration = 1\ndt = 0.01\nframe_rate = 25\n\n[[cloth]]\nname = \"sheet\"\ngrid = {{ size = [1, 1], resolution = [3, 3] }}\n{keys}\n"
+        );
+        Scene::from_str(&text, Path::new("dir/s.toml"))
+    }
+
+    #[test]
+    fn a_preset_fills_the_shell_keys_and_explicit_keys_win() {
+        let cotton = fabric("cotton").unwrap();
+        let s = cloth("material = \"cotton\"").unwrap();
+        let m = &s.cloths[0].material;
+        assert_eq!(m.model, ClothModel::Shell);
+        assert_eq!(m.mass, MassSpec::Density(cotton.density));
+        assert_eq!(m.shell.stretch_modulus, cotton.stretch_modulus);
+        assert_eq!(m.shell.bending_rigidity, cotton.bending_rigidity);
+        assert_eq!(m.shell.shear_modulus, Some(cotton.shear_modulus));
+        let s = cloth(
+            "material = \"cotton\"\ndensity = 0.5\nbending_rigidity = [1e-4, 2e-4]\nstretch_modulus = 300\nstrain_limit = 0.1\npressure = 20",
+        )
+        .unwrap();
+        let m = &s.cloths[0].material;
+        assert_eq!(m.mass, MassSpec::Density(0.5));
+        assert_eq!(m.shell.bending_rigidity, [1e-4, 2e-4]);
+        assert_eq!(m.shell.stretch_modulus, [300.0, 300.0]);
+        assert_eq!(m.shell.poisson, cotton.poisson);
+        assert_eq!((m.strain_limit, m.pressure), (Some(0.1), 20.0));
+        // without a preset: Shell::default's values and the springs' keys untouched
+        let s = cloth("model = \"shell\"\ndensity = 0.2\ndamping = 0.02").unwrap();
+        let m = &s.cloths[0].material;
+        assert_eq!((m.shell.damping, m.damping), (0.02, 0.0));
+        let s = cloth("density = 0.2\ndamping = 0.02").unwrap();
+        assert_eq!(s.cloths[0].material.model, ClothModel::Springs);
+        assert_eq!(s.cloths[0].material.damping, 0.02);
+    }
+
+    #[test]
+    fn wrong_material_keys_are_one_error_naming_the_field() {
+        let cases = [
+            ("model = \"cloth\"\ndensity = 1", "line 9, cloth[0].model: unknown cloth model 'cloth'"),
+            ("material = \"velvet\"", "cloth[0].material: unknown fabric 'velvet' (expected one of cotton,"),
+            ("model = \"springs\"\nmaterial = \"cotton\"", "cloth[0].material: fabric presets set the shell"),
+            ("density = 1\nstretch_modulus = 100", "cloth[0].stretch_modulus: is a key of model = \"shell\""),
+            ("model = \"shell\"\ndensity = 1\nbend_stiffness = 1", "cloth[0].bend_stiffness: is a key of model = \"springs\""),
+            ("model = \"shell\"\ndensity = 1\nstretch_modulus = [1, 2, 3]", "cloth[0].stretch_modulus: must be a number or an array of 2"),
+            ("model = \"shell\"\ndensity = 1\nstretch_modulus = -5", "cloth[0].stretch_modulus: must be a finite number > 0"),
+            ("model = \"shell\"\ndensity = 1\npoisson = 0.9\nstretch_modulus = [100, 200]", "cloth[0].poisson: must be finite with poisson²"),
+            ("model = \"shell\"\ndensity = 1\nbending_rigidity = -1e-5", "cloth[0].bending_rigidity:"),
+            ("model = \"shell\"\ndensity = 1\nshear_modulus = 0", "cloth[0].shear_modulus:"),
+            ("model = \"shell\"\ndensity = 1\ndamping = -1", "cloth[0].damping:"),
+            ("density = 1\nstiffnes = 3", "cloth[0].stiffnes: unknown key of [[cloth]] (expected one of name, mesh,"),
+        ];
+        for (keys, want) in cases {
+            let e = cloth(keys).unwrap_err().to_string();
+            assert!(e.starts_with("dir/s.toml: line") && e.contains(want), "{keys}: {e}");
+            assert_eq!(e.lines().count(), 1, "{e}");
+        }
+    }
+}
