@@ -94,7 +94,11 @@ fn sig4(x: f64) -> String {
     let digits = 3 - x.abs().log10().floor() as i32;
     if (0..=6).contains(&digits) {
         let t = format!("{x:.*}", digits as usize);
-        let t = if t.contains('.') { t.trim_end_matches('0').trim_end_matches('.') } else { &t };
+        let t = if t.contains('.') {
+            t.trim_end_matches('0').trim_end_matches('.')
+        } else {
+            &t
+        };
         t.to_string()
     } else {
         format!("{x:.3e}")
@@ -508,7 +512,9 @@ impl Model {
             if c.mesh.faces.is_empty() {
                 return Err(Error::field(
                     field("model"),
-                    format!("cloth '{name}' has no faces: the shell model acts on triangles and quads"),
+                    format!(
+                        "cloth '{name}' has no faces: the shell model acts on triangles and quads"
+                    ),
                 ));
             }
         }

@@ -43,7 +43,12 @@ pub(super) const KEYS: &[&str] = &[
 /// Keys of the springs model only.
 const SPRINGS: &[&str] = &["stretch_stiffness", "shear_stiffness", "bend_stiffness"];
 /// Keys of the shell model only.
-const SHELL: &[&str] = &["stretch_modulus", "poisson", "shear_modulus", "bending_rigidity"];
+const SHELL: &[&str] = &[
+    "stretch_modulus",
+    "poisson",
+    "shear_modulus",
+    "bending_rigidity",
+];
 
 /// The material of the table behind `k`.
 pub(super) fn material(k: &Keys) -> Result<Material> {
@@ -99,7 +104,8 @@ pub(super) fn material(k: &Keys) -> Result<Material> {
             ));
         }
     };
-    let or = |key: &str, default: f64| Ok::<f64, crate::Error>(k.opt_number(key)?.unwrap_or(default));
+    let or =
+        |key: &str, default: f64| Ok::<f64, crate::Error>(k.opt_number(key)?.unwrap_or(default));
     let d = Material::default();
     let mut m = Material {
         stretch_stiffness: or("stretch_stiffness", d.stretch_stiffness)?,
@@ -120,7 +126,9 @@ pub(super) fn material(k: &Keys) -> Result<Material> {
         if let Some(g) = k.opt_number("shear_modulus")? {
             s.shear_modulus = Some(g);
         }
-        s.bending_rigidity = k.opt_pair("bending_rigidity")?.unwrap_or(s.bending_rigidity);
+        s.bending_rigidity = k
+            .opt_pair("bending_rigidity")?
+            .unwrap_or(s.bending_rigidity);
         s.damping = or("damping", s.damping)?;
         m.damping = 0.0;
     }
@@ -200,22 +208,61 @@ mod tests {
     #[test]
     fn wrong_material_keys_are_one_error_naming_the_field() {
         let cases = [
-            ("model = \"cloth\"\ndensity = 1", "line 9, cloth[0].model: unknown cloth model 'cloth'"),
-            ("material = \"velvet\"", "cloth[0].material: unknown fabric 'velvet' (expected one of cotton,"),
-            ("model = \"springs\"\nmaterial = \"cotton\"", "cloth[0].material: fabric presets set the shell"),
-            ("density = 1\nstretch_modulus = 100", "cloth[0].stretch_modulus: is a key of model = \"shell\""),
-            ("model = \"shell\"\ndensity = 1\nbend_stiffness = 1", "cloth[0].bend_stiffness: is a key of model = \"springs\""),
-            ("model = \"shell\"\ndensity = 1\nstretch_modulus = [1, 2, 3]", "cloth[0].stretch_modulus: must be a number or an array of 2"),
-            ("model = \"shell\"\ndensity = 1\nstretch_modulus = -5", "cloth[0].stretch_modulus: must be a finite number > 0"),
-            ("model = \"shell\"\ndensity = 1\npoisson = 0.9\nstretch_modulus = [100, 200]", "cloth[0].poisson: must be finite with poisson²"),
-            ("model = \"shell\"\ndensity = 1\nbending_rigidity = -1e-5", "cloth[0].bending_rigidity:"),
-            ("model = \"shell\"\ndensity = 1\nshear_modulus = 0", "cloth[0].shear_modulus:"),
-            ("model = \"shell\"\ndensity = 1\ndamping = -1", "cloth[0].damping:"),
-            ("density = 1\nstiffnes = 3", "cloth[0].stiffnes: unknown key of [[cloth]] (expected one of name, mesh,"),
+            (
+                "model = \"cloth\"\ndensity = 1",
+                "line 9, cloth[0].model: unknown cloth model 'cloth'",
+            ),
+            (
+                "material = \"velvet\"",
+                "cloth[0].material: unknown fabric 'velvet' (expected one of cotton,",
+            ),
+            (
+                "model = \"springs\"\nmaterial = \"cotton\"",
+                "cloth[0].material: fabric presets set the shell",
+            ),
+            (
+                "density = 1\nstretch_modulus = 100",
+                "cloth[0].stretch_modulus: is a key of model = \"shell\"",
+            ),
+            (
+                "model = \"shell\"\ndensity = 1\nbend_stiffness = 1",
+                "cloth[0].bend_stiffness: is a key of model = \"springs\"",
+            ),
+            (
+                "model = \"shell\"\ndensity = 1\nstretch_modulus = [1, 2, 3]",
+                "cloth[0].stretch_modulus: must be a number or an array of 2",
+            ),
+            (
+                "model = \"shell\"\ndensity = 1\nstretch_modulus = -5",
+                "cloth[0].stretch_modulus: must be a finite number > 0",
+            ),
+            (
+                "model = \"shell\"\ndensity = 1\npoisson = 0.9\nstretch_modulus = [100, 200]",
+                "cloth[0].poisson: must be finite with poisson²",
+            ),
+            (
+                "model = \"shell\"\ndensity = 1\nbending_rigidity = -1e-5",
+                "cloth[0].bending_rigidity:",
+            ),
+            (
+                "model = \"shell\"\ndensity = 1\nshear_modulus = 0",
+                "cloth[0].shear_modulus:",
+            ),
+            (
+                "model = \"shell\"\ndensity = 1\ndamping = -1",
+                "cloth[0].damping:",
+            ),
+            (
+                "density = 1\nstiffnes = 3",
+                "cloth[0].stiffnes: unknown key of [[cloth]] (expected one of name, mesh,",
+            ),
         ];
         for (keys, want) in cases {
             let e = cloth(keys).unwrap_err().to_string();
-            assert!(e.starts_with("dir/s.toml: line") && e.contains(want), "{keys}: {e}");
+            assert!(
+                e.starts_with("dir/s.toml: line") && e.contains(want),
+                "{keys}: {e}"
+            );
             assert_eq!(e.lines().count(), 1, "{e}");
         }
     }
