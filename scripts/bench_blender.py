@@ -4,6 +4,7 @@ Run it with a Python that has the `bpy` module (Blender as a Python module, from
 
     bash scripts/bench-peers.sh                # installs bpy into target/bpy-venv if missing
     target/bpy-venv/bin/python scripts/bench_blender.py --scenes hang-64,drape-64 --runs 3
+    bash scripts/bench-peers.sh --runs 5 --tolerance 1e-3,1e-2   # drapery also at Blender's 1e-2
 
 For every scene and every run it runs `drapery bench --scenes SCENE --runs 1` and then the same
 scene in Blender, one after the other (the machine is shared and noisy, so the two sides are
@@ -180,7 +181,10 @@ def lowest(scene, cloth):
 
 
 def blender_run(name, frames, warm_up=None):
-    """One run of a scene in Blender: ms per timed frame, and the lowest height at the end."""
+    """One run of a scene in Blender: ms per timed frame, the CG iterations of each timed step
+    (Blender stops at 100), and the lowest height at the end."""
+    import bpy
+
     kind, n = parse_scene(name)
     scene, cloth = build_scene(kind, n)
     warm = WARM_UP[kind] if warm_up is None else warm_up
@@ -188,16 +192,20 @@ def blender_run(name, frames, warm_up=None):
     for _ in range(warm):
         frame += 1
         scene.frame_set(frame)
-    start = time.perf_counter()
+    seconds, iterations = 0.0, []
     for _ in range(frames):
         frame += 1
+        start = time.perf_counter()
         scene.frame_set(frame)
-    ms = (time.perf_counter() - start) * 1e3 / frames
-    return ms, lowest(scene, cloth)
+        seconds += time.perf_counter() - start
+        # one step per frame: the frame's maximum is that step's count (read outside the timing)
+        ev = cloth.evaluated_get(bpy.context.evaluated_depsgraph_get())
+        iterations.append(ev.modifiers["cloth"].solver_result.max_iterations)
+    return seconds * 1e3 / frames, iterations, lowest(scene, cloth)
 
 
 def drapery_run(binary, name, frames, tolerance, warm_up=None):
-    """One run of `drapery bench` on one scene: its ms per frame."""
+    """One run of `drapery bench` on one scene: its ms per frame and CG iterations per step."""
     cmd = [binary, "bench", "--scenes", name, "--frames", str(frames), "--runs", "1"]
     cmd += ["--tolerance", str(tolerance)]
     if warm_up is not None:
@@ -206,7 +214,7 @@ def drapery_run(binary, name, frames, tolerance, warm_up=None):
     for line in out.splitlines():
         cols = line.split()
         if cols and cols[0] == name:
-            return float(cols[2])
+            return float(cols[2]), float(cols[4])
     raise RuntimeError(f"no line for {name} in drapery bench's output:\n{out}")
 
 
@@ -217,9 +225,12 @@ def main():
     p.add_argument("--frames", type=int, default=10, help="timed frames per run")
     p.add_argument("--runs", type=int, default=3, help="runs per scene and side (median)")
     p.add_argument("--warm-up", type=int, default=None, help="untimed frames (default: drapery's)")
-    p.add_argument("--tolerance", type=float, default=1e-3, help="drapery's PCG tolerance")
+    p.add_argument(
+        "--tolerance",
+        default="1e-3",
+        help="drapery's PCG tolerance; a comma-separated list gives one drapery column each",
+    )
     p.add_argument("--drapery", default=os.path.join(root, "target", "release", "drapery"))
-    p.add_argument("--blender-only", action="store_true", help="skip drapery")
     p.add_argument("--json", help="also write the runs to this file")
     args = p.parse_args()
     if args.frames < 1 or args.runs < 1:
@@ -227,36 +238,52 @@ def main():
     scenes = args.scenes.split(",")
     for s in scenes:
         parse_scene(s)
+    tolerances = [float(t) for t in args.tolerance.split(",")]
     import bpy
 
     print(
         f"Blender {bpy.app.version_string} (bpy), Python {sys.version.split()[0]}; "
         f"{args.frames} timed frames x {args.runs} runs per scene and side, drapery and Blender "
-        f"alternated run by run; drapery tolerance {args.tolerance:g}",
+        f"alternated run by run; drapery tolerance {', '.join(f'{t:g}' for t in tolerances)}",
         flush=True,
     )
     results = {}
     for s in scenes:
         kind, n = parse_scene(s)
-        d_ms, b_ms, low = [], [], []
-        for r in range(args.runs):
-            if not args.blender_only:
-                d_ms.append(drapery_run(args.drapery, s, args.frames, args.tolerance, args.warm_up))
-            ms, z = blender_run(s, args.frames, args.warm_up)
-            b_ms.append(ms)
-            low.append(z)
-            print(
-                f"  {s} run {r + 1}: drapery {d_ms[-1] if d_ms else float('nan'):.2f} ms/frame, "
-                f"Blender {ms:.2f} ms/frame (lowest cloth point {z:.3f} m)",
-                flush=True,
-            )
-        results[s] = {"vertices": n * n, "drapery_ms": d_ms, "blender_ms": b_ms, "lowest": low}
+        r = {"vertices": n * n, "drapery": {t: [] for t in tolerances}, "blender": []}
+        for run in range(args.runs):
+            line = f"  {s} run {run + 1}:"
+            for t in tolerances:
+                ms, cg = drapery_run(args.drapery, s, args.frames, t, args.warm_up)
+                r["drapery"][t].append({"ms": ms, "cg": cg})
+                line += f" drapery@{t:g} {ms:.2f} ms/frame ({cg:.1f} CG/step),"
+            ms, its, z = blender_run(s, args.frames, args.warm_up)
+            r["blender"].append({"ms": ms, "cg": its, "lowest": z})
+            line += f" Blender {ms:.2f} ms/frame (CG/step {its}, lowest cloth point {z:.3f} m)"
+            print(line, flush=True)
+        results[s] = r
+    med = statistics.median
     print()
-    print(f"{'scene':<10} {'vertices':>8} {'drapery ms/frame':>17} {'Blender ms/frame':>17} {'Blender/drapery':>16}")
+    head = f"{'scene':<10} {'vertices':>8}"
+    for t in tolerances:
+        head += f" {'drapery@' + format(t, 'g'):>14} {'CG':>6}"
+    head += f" {'Blender':>10} {'CG':>6} {'at cap':>7}"
+    for t in tolerances:
+        head += f" {'B/d@' + format(t, 'g'):>10}"
+    print(head + "   (ms/frame; CG: iterations per step, median; at cap: Blender steps that hit 100)")
     for s, r in results.items():
-        d = statistics.median(r["drapery_ms"]) if r["drapery_ms"] else float("nan")
-        b = statistics.median(r["blender_ms"])
-        print(f"{s:<10} {r['vertices']:>8} {d:>17.2f} {b:>17.2f} {b / d:>16.2f}")
+        b = med([x["ms"] for x in r["blender"]])
+        its = [i for x in r["blender"] for i in x["cg"]]
+        line = f"{s:<10} {r['vertices']:>8}"
+        ds = []
+        for t in tolerances:
+            d = med([x["ms"] for x in r["drapery"][t]])
+            ds.append(d)
+            line += f" {d:>14.2f} {med([x['cg'] for x in r['drapery'][t]]):>6.1f}"
+        line += f" {b:>10.2f} {med(its):>6.0f} {sum(i >= 100 for i in its):>3}/{len(its):<3}"
+        for d in ds:
+            line += f" {b / d:>10.2f}"
+        print(line)
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"blender": bpy.app.version_string, "results": results}, f, indent=1)
