@@ -200,7 +200,10 @@ def blender_run(name, frames, warm_up=None):
         seconds += time.perf_counter() - start
         # one step per frame: the frame's maximum is that step's count (read outside the timing)
         ev = cloth.evaluated_get(bpy.context.evaluated_depsgraph_get())
-        iterations.append(ev.modifiers["cloth"].solver_result.max_iterations)
+        result = ev.modifiers["cloth"].solver_result
+        if result is None:
+            raise RuntimeError(f"{name}: Blender did not step frame {frame} (no solver result)")
+        iterations.append(result.max_iterations)
     return seconds * 1e3 / frames, iterations, lowest(scene, cloth)
 
 
