@@ -32,11 +32,13 @@ pub mod report;
 pub mod settings;
 mod solve;
 mod system;
+pub mod tangles;
 #[cfg(test)]
 mod testing;
 
 pub use report::{StageTimes, StepReport};
 pub use settings::{LinearSolver, SolverSettings};
+pub use tangles::Tangled;
 
 use crate::collision::seams::Seams;
 use crate::constraints::obstacle::ActiveSet;
@@ -54,6 +56,7 @@ use newton::{Outcome, Potential};
 use report::timed;
 use solve::{Problem, Scratch, Solvers};
 use system::System;
+use tangles::Tangles;
 
 /// A model plus the solver's working memory. Advance it with [`Simulation::step`].
 pub struct Simulation {
@@ -72,10 +75,13 @@ pub struct Simulation {
     system: System,
     /// State the simulation was created in (the multigrid's reference, see [`Self::reference`]).
     initial: (Vec<Vec3>, Vec<Vec3>),
-    triangles: Vec<[u32; 3]>,
+    pub(crate) triangles: Vec<[u32; 3]>,
     edges: Vec<[u32; 2]>,
     /// The stitched neighbourhoods exempt from cloth–cloth contact.
     seams: Seams,
+    /// Cloth that started inside colliders or crossed, still being untangled (part of the
+    /// state: a snapshot holds it).
+    pub(crate) tangles: Tangles,
     work: Work,
     solvers: Solvers,
 }
@@ -119,6 +125,7 @@ impl Simulation {
             triangles,
             edges,
             seams,
+            tangles: Tangles::default(),
             work: Work::default(),
             solvers: Solvers::default(),
         })
@@ -146,10 +153,18 @@ impl Simulation {
         let start = timed(&mut report.stages.guard, || {
             guard::start(&self.model, at, h)
         })?;
+        if !self.tangles.found {
+            self.tangles = Tangles::find(&self.model, &self.triangles, self.time);
+        }
         let pose = timed(&mut report.stages.pose, || {
             self.reference(h);
-            pose::at(&self.model, self.time, h)
+            let mut pose = pose::at(&self.model, self.time, h);
+            if let Some(c) = &self.model.collision {
+                self.tangles.push(&self.model, c.thickness, &mut pose);
+            }
+            pose
         });
+        let n = self.model.particle_count();
         let contacts = timed(&mut report.stages.detect, || {
             let c = detect::contacts(
                 &self.model,
@@ -157,7 +172,7 @@ impl Simulation {
                 &self.edges,
                 &start,
                 &pose,
-                &self.seams,
+                &|ids| self.seams.exempt(ids) || self.tangles.exempt(ids, n),
             );
             self.system.use_contacts(c.repulsions.as_ref());
             c
@@ -166,7 +181,6 @@ impl Simulation {
         report.self_contacts = repulsions.map_or(0, |r| r.stencils.len());
 
         // Newton iterations on v; x = x₀ + h v except at the first linearization point.
-        let n = self.model.particle_count();
         let mut work = std::mem::take(&mut self.work);
         work.linearized.resize(n);
         work.solve.resize(n);
@@ -240,6 +254,7 @@ impl Simulation {
         let (held, impulse) = active.held();
         report.obstacle_contacts = held.len();
 
+        let mut tangles = None;
         if let Some(c) = &self.model.collision {
             timed(&mut report.stages.friction, || {
                 friction::run(
@@ -262,13 +277,17 @@ impl Simulation {
                     &self.triangles,
                     &self.edges,
                     &pose,
-                    &self.seams,
+                    &|ids| self.seams.exempt(ids) || self.tangles.exempt(ids, n),
                     &start.x0,
                     &mut x,
                     &mut v,
                 )
             })
             .map_err(|e| at.fail(e))?;
+            let t1 = self.time + h;
+            tangles = Some(
+                (self.tangles).update(&self.model, &self.triangles, &x, t1, c.thickness),
+            );
         }
 
         let t = std::time::Instant::now();
@@ -287,6 +306,9 @@ impl Simulation {
         }
         self.model.x = x;
         self.model.v = v;
+        if let Some(t) = tangles {
+            self.tangles = t;
+        }
         self.time += h;
         self.steps += 1;
         report.stages.commit += t.elapsed().as_secs_f64();
@@ -461,9 +483,21 @@ impl Simulation {
             .assemble(&self.model.mass, &self.forces, &at, None, None);
     }
 
-    /// Cloth triangle pairs that intersect and particles inside analytic obstacles, at the
-    /// current state (what `drapery check` counts). A starting state with intersections is
-    /// reported, not repaired.
+    /// What is still tangled: free cloth vertices being pushed out of colliders and crossed
+    /// cloth triangle pairs being let through the fail-safe ([`tangles`]). Before the first
+    /// step, what the first step will find (a fresh simulation's starting tangles); after a
+    /// pre-roll, what remains of them.
+    pub fn tangled(&self) -> Tangled {
+        if self.tangles.found {
+            self.tangles.counts()
+        } else {
+            Tangles::find(&self.model, &self.triangles, self.time).counts()
+        }
+    }
+
+    /// Cloth triangle pairs that intersect and particles inside solid obstacles or closed
+    /// meshes, at the current state (what `drapery check` counts). A starting state with
+    /// intersections is untangled by the steps ([`Simulation::tangled`]).
     pub fn intersections(&self) -> (usize, usize) {
         // the two ends of a stitched pair count as one vertex (a closed seam's sides touch)
         let sewn: Vec<[u32; 2]> = self.model.stitches.iter().map(|s| [s.a, s.b]).collect();

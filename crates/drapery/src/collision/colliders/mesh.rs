@@ -78,6 +78,7 @@ impl TriangleMesh {
 /// The mesh with vertices at the same position merged (the first of each kept, in order) and
 /// the triangles left without area by the merge dropped: tessellations repeat their seam and
 /// pole vertices.
+#[cfg(test)]
 pub(crate) fn welded(vertices: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> (Vec<Vec3>, Vec<[u32; 3]>) {
     let mut first = std::collections::HashMap::new();
     let mut kept = Vec::new();
