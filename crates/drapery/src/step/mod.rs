@@ -153,14 +153,19 @@ impl Simulation {
         let start = timed(&mut report.stages.guard, || {
             guard::start(&self.model, at, h)
         })?;
-        if !self.tangles.found {
-            self.tangles = Tangles::find(&self.model, &self.triangles, self.time);
-        }
+        timed(&mut report.stages.pose, || self.reference(h));
+        // the starting tangles are found at the first step (kept only if the step succeeds)
+        let fresh;
+        let tangles = if self.tangles.found {
+            &self.tangles
+        } else {
+            fresh = Tangles::find(&self.model, &self.triangles, self.time);
+            &fresh
+        };
         let pose = timed(&mut report.stages.pose, || {
-            self.reference(h);
             let mut pose = pose::at(&self.model, self.time, h);
             if let Some(c) = &self.model.collision {
-                self.tangles.push(&self.model, c.thickness, &mut pose);
+                tangles.push(&self.model, c.thickness, &mut pose);
             }
             pose
         });
@@ -172,7 +177,7 @@ impl Simulation {
                 &self.edges,
                 &start,
                 &pose,
-                &|ids| self.seams.exempt(ids) || self.tangles.exempt(ids, n),
+                &|ids| self.seams.exempt(ids) || tangles.exempt(ids, n),
             );
             self.system.use_contacts(c.repulsions.as_ref());
             c
@@ -254,7 +259,7 @@ impl Simulation {
         let (held, impulse) = active.held();
         report.obstacle_contacts = held.len();
 
-        let mut tangles = None;
+        let mut untangled = None;
         if let Some(c) = &self.model.collision {
             timed(&mut report.stages.friction, || {
                 friction::run(
@@ -277,7 +282,7 @@ impl Simulation {
                     &self.triangles,
                     &self.edges,
                     &pose,
-                    &|ids| self.seams.exempt(ids) || self.tangles.exempt(ids, n),
+                    &|ids| self.seams.exempt(ids) || tangles.exempt(ids, n),
                     &start.x0,
                     &mut x,
                     &mut v,
@@ -285,9 +290,7 @@ impl Simulation {
             })
             .map_err(|e| at.fail(e))?;
             let t1 = self.time + h;
-            tangles = Some(
-                (self.tangles).update(&self.model, &self.triangles, &x, t1, c.thickness),
-            );
+            untangled = Some(tangles.update(&self.model, &self.triangles, &x, t1, c.thickness));
         }
 
         let t = std::time::Instant::now();
@@ -306,7 +309,7 @@ impl Simulation {
         }
         self.model.x = x;
         self.model.v = v;
-        if let Some(t) = tangles {
+        if let Some(t) = untangled {
             self.tangles = t;
         }
         self.time += h;

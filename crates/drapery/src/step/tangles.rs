@@ -5,8 +5,9 @@
 //! * *inside*: the free cloth vertices strictly inside a collider (a solid's negative signed
 //!   distance, or inside a closed mesh, [`crate::collision::colliders::interior`]). Each step
 //!   prescribes their velocity toward the way out ([`Tangles::push`]: the closest surface point
-//!   plus the thickness, at most [`PUSH_SPEED`]), like a moving pin, and the fail-safe lets
-//!   them through the collider's surface ([`Tangles::exempt`]). A vertex is released once it
+//!   plus the thickness), like a moving pin, all at the rate that moves the farthest at
+//!   [`PUSH_SPEED`] so that they come out together, and the fail-safe lets them through the
+//!   collider's surface ([`Tangles::exempt`]). A vertex is released once it
 //!   is outside and at least half the thickness from the surface; from then on the ordinary
 //!   contact handling applies. Pinned and handle vertices are never pushed (their motion is
 //!   prescribed) and not recorded.
@@ -142,23 +143,21 @@ impl Tangles {
         }
         let (t1, h) = (pose.t0 + pose.h, pose.h);
         let insides = insides(model, &self.inside, t1);
-        let moving: Vec<(u32, Vec3)> = (self.inside.par_iter())
+        let way: Vec<(u32, Vec3)> = (self.inside.par_iter())
             .filter(|&&[i, _]| !pose.pinned[i as usize])
             .map(|&[i, k]| {
                 let x = model.x[i as usize];
                 let o = &model.obstacles[k as usize].collider;
                 let inside = insides[k as usize].as_ref().is_some_and(|s| s.contains(x));
-                let target = way_out(o, inside, x, t1, thickness);
-                let v = (target - x) / h;
-                let speed = v.length();
-                let v = if speed > PUSH_SPEED {
-                    v * (PUSH_SPEED / speed)
-                } else {
-                    v
-                };
-                (i, v)
+                (i, way_out(o, inside, x, t1, thickness) - x)
             })
             .collect();
+        // every vertex along its way at the rate that takes the farthest at PUSH_SPEED, so that
+        // they all come out together (a vertex out early would be held by stretched springs
+        // to those still inside, and snap when they come out)
+        let farthest = way.iter().map(|(_, d)| d.length()).fold(0.0, f64::max);
+        let rate = (1.0 / h).min(PUSH_SPEED / farthest);
+        let moving: Vec<(u32, Vec3)> = way.into_iter().map(|(i, d)| (i, d * rate)).collect();
         for &(i, _) in &moving {
             pose.pinned[i as usize] = true;
         }

@@ -220,4 +220,26 @@ mod tests {
         }
         assert!(checked > 600);
     }
+
+    /// The example mannequin is watertight; its torso and limbs are inside, the space around
+    /// and between them (between the arm and the hip) outside.
+    #[test]
+    fn the_mannequin_is_closed_and_encloses_its_body() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/mannequin/mannequin_0001.obj");
+        let m = crate::io::obj::read_obj(std::path::Path::new(path)).unwrap();
+        let t = m.triangles();
+        let inside = Interior::new(m.positions.clone(), &t).expect("closed");
+        for (p, want) in [
+            ([0.0, 1.1, 0.0], true),   // chest
+            ([0.0, 0.95, 0.0], true),  // hips
+            ([0.31, 1.0, 0.0], true),  // an arm at the side
+            ([0.0, 1.62, 0.0], true),  // head
+            ([0.0, 1.1, 0.3], false),  // in front of the chest
+            ([0.23, 1.0, 0.0], false), // between the arm and the hip
+            ([0.0, 0.5, 0.0], false),  // between the legs
+            ([0.0, 1.9, 0.0], false),  // above the head
+        ] {
+            assert_eq!(inside.contains(Vec3::from_array(p)), want, "{p:?}");
+        }
+    }
 }
