@@ -76,8 +76,12 @@ impl Simulation {
         }
         let (found, inside, crossings) = &s.tangles;
         let (tris, obstacles) = (self.triangles.len(), self.model.obstacles.len());
-        if inside.iter().any(|&[p, k]| p as usize >= n || k as usize >= obstacles)
-            || crossings.iter().any(|c| c.iter().any(|&t| t as usize >= tris))
+        if inside
+            .iter()
+            .any(|&[p, k]| p as usize >= n || k as usize >= obstacles)
+            || crossings
+                .iter()
+                .any(|c| c.iter().any(|&t| t as usize >= tris))
         {
             return Err(Error::Invalid(
                 "the snapshot's tangles name particles, colliders or triangles this scene does not have: not a state of this scene".into(),
@@ -213,7 +217,8 @@ impl Snapshot {
         let tangles = if v3 {
             (true, Vec::new(), Vec::new())
         } else {
-            let misfit = || damaged("the particle count or a list length does not match the length");
+            let misfit =
+                || damaged("the particle count or a list length does not match the length");
             let found = r.u64().ok_or_else(misfit)? == 1;
             let mut list = || -> Result<Vec<[u32; 2]>> {
                 let len = r.u64().ok_or_else(misfit)?;

@@ -7,7 +7,7 @@
 //! | stage | module | does |
 //! |---|---|---|
 //! | guard | [`guard`] | a valid step size and a finite starting state |
-//! | pose | [`pose`] | colliders and pin targets over `[t, t + h]` |
+//! | pose | [`pose`] | colliders and pin targets over `[t, t + h]`; cloth starting inside a collider pushed out ([`tangles`]) |
 //! | detect | [`detect`] | obstacle contact candidates, self-contact stencils |
 //! | linearize | [`linearize`] | forces, `A`, right-hand side (per Newton iteration) |
 //! | constrain, solve | [`solve`] | filter `S` and `z`, filtered PCG on the obstacle active set |
@@ -399,7 +399,8 @@ impl Simulation {
     }
 
     /// The pre-roll: `steps` steps of `h` ending at `t = 0`, from `t = -steps·h`, during which
-    /// every prescribed motion holds its pose at 0 at rest ([`crate::animation::motion`]); then
+    /// every prescribed motion holds its pose at 0 at rest ([`crate::animation::motion`]) and
+    /// cloth that starts tangled is untangled ([`tangles`], [`Simulation::tangled`]); then
     /// the clock is set to exactly 0 and the step count to 0, so frame 0 is the settled state.
     /// Nothing happens for 0 steps. On a failed step the error is returned and the simulation
     /// is left at the last good step.

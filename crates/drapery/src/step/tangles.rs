@@ -113,7 +113,8 @@ impl Tangles {
             .with_min_len(64)
             .filter_map(|i| {
                 let k = (!held[i]).then(|| {
-                    (insides.iter()).position(|s| s.as_ref().is_some_and(|s| s.contains(model.x[i])))
+                    (insides.iter())
+                        .position(|s| s.as_ref().is_some_and(|s| s.contains(model.x[i])))
                 })??;
                 Some([i as u32, k as u32])
             })
@@ -171,9 +172,8 @@ impl Tangles {
     /// collider (particles from `n` on are colliders'), or a pair within a crossing's
     /// neighbourhood.
     pub fn exempt(&self, ids: &[u32; 4], n: usize) -> bool {
-        let pushed = |p: u32| {
-            (p as usize) < n && self.inside.binary_search_by_key(&p, |e| e[0]).is_ok()
-        };
+        let pushed =
+            |p: u32| (p as usize) < n && self.inside.binary_search_by_key(&p, |e| e[0]).is_ok();
         (!self.inside.is_empty()
             && ids.iter().any(|&p| p as usize >= n)
             && ids.iter().any(|&p| pushed(p)))
@@ -321,11 +321,20 @@ radius = 0.5
             assert_eq!(sim.intersections().1, put_inside, "the checker agrees");
             if mesh {
                 for k in 0..50 {
-                    let i = sim.tangles.inside.first().map(|e| e[0] as usize).unwrap_or(0);
+                    let i = sim
+                        .tangles
+                        .inside
+                        .first()
+                        .map(|e| e[0] as usize)
+                        .unwrap_or(0);
                     let before = sim.positions()[i];
                     sim.step(0.005).unwrap();
                     if k % 5 == 0 {
-                        eprintln!("{k} {:?} {i} {before} -> {}", sim.tangled(), sim.positions()[i]);
+                        eprintln!(
+                            "{k} {:?} {i} {before} -> {}",
+                            sim.tangled(),
+                            sim.positions()[i]
+                        );
                     }
                 }
             }
@@ -401,7 +410,10 @@ normal = [0.0, 1.0, 0.0]
         assert_eq!(sim.tangled(), Tangled::default());
         assert_eq!(sim.intersections(), (0, 0));
         let free_y = |sim: &Simulation| sim.positions()[121 + 24].y;
-        assert!(free_y(&sim) < 0.5, "the middle vertex is back below the taut sheet");
+        assert!(
+            free_y(&sim) < 0.5,
+            "the middle vertex is back below the taut sheet"
+        );
         for _ in 0..s.step_count() {
             sim.step(s.step_size()).unwrap();
             assert_eq!(sim.intersections(), (0, 0), "at t = {}", sim.time());

@@ -362,7 +362,12 @@ fn a_sheet_starting_deep_inside_a_sphere_is_pushed_out_at_the_push_speed_and_sta
     for _ in 0..45 {
         s.step(0.01).unwrap();
         if s.tangled().inside > 0 {
-            assert!(s.model().velocities().iter().all(|v| v.length() <= 0.5 + 1e-9));
+            assert!(
+                s.model()
+                    .velocities()
+                    .iter()
+                    .all(|v| v.length() <= 0.5 + 1e-9)
+            );
         }
     }
     assert_eq!(s.tangled().inside, 0);

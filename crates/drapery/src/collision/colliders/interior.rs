@@ -225,7 +225,10 @@ mod tests {
     /// and between them (between the arm and the hip) outside.
     #[test]
     fn the_mannequin_is_closed_and_encloses_its_body() {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/mannequin/mannequin_0001.obj");
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/mannequin/mannequin_0001.obj"
+        );
         let m = crate::io::obj::read_obj(std::path::Path::new(path)).unwrap();
         let t = m.triangles();
         let inside = Interior::new(m.positions.clone(), &t).expect("closed");
