@@ -256,11 +256,15 @@ pub fn run(args: RunArgs) -> Result<()> {
         .map(|&f| writer_for(f, dir, &stem, scene.frame_rate, &scene.obstacles))
         .partition(|w| w.whole_run());
     let keep_history = !whole_run.is_empty();
+    let mut untangling = None;
     if matches!(begin, Start::Fresh) {
         // `[simulation] preroll`: settle with everything held at its pose at t = 0; frame 0 is
-        // the settled state (a resumed run restores its snapshot instead)
+        // the settled state (a resumed run restores its snapshot instead); cloth starting
+        // inside colliders or crossed is untangled there
+        let before = sim.tangled();
         sim.preroll(scene.preroll_steps(), scene.step_size())
             .with_context(|| format!("{}: pre-roll", args.scene.display()))?;
+        untangling = (before != drapery::Tangled::default()).then(|| (before, sim.tangled()));
     }
     let (first, history) = match begin {
         Start::Fresh => (
@@ -326,12 +330,32 @@ pub fn run(args: RunArgs) -> Result<()> {
         Ok(())
     };
     if first == 0 {
+        if let Some((before, now)) = untangling {
+            let when = if scene.preroll_steps() > 0 {
+                "after the pre-roll"
+            } else {
+                "at frame 0 (no pre-roll: the first steps untangle)"
+            };
+            progress.suspend(|| {
+                eprintln!(
+                    "{}: the cloth starts tangled ({} vertices inside colliders, {} crossed cloth triangle pairs); {when}: {} inside, {} crossed",
+                    args.scene.display(),
+                    before.inside,
+                    before.crossings,
+                    now.inside,
+                    now.crossings
+                )
+            });
+        }
         if sim.model().collision().is_some() {
             let (pairs, inside) = sim.intersections();
-            if pairs > 0 || inside > 0 {
+            let t = sim.tangled();
+            // what untangling does not handle: pinned vertices inside, crossings without
+            // self-collision
+            if pairs > t.crossings || inside > t.inside {
                 progress.suspend(|| {
                     eprintln!(
-                        "warning: {}: the initial state already intersects ({pairs} intersecting cloth triangle pairs, {inside} vertices inside colliders); continuing without repairing it",
+                        "warning: {}: frame 0 intersects ({pairs} intersecting cloth triangle pairs, {inside} vertices inside colliders), not all of it being untangled (pinned or handle vertices inside a collider, or crossings without self_collision)",
                         args.scene.display()
                     )
                 });

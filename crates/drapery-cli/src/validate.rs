@@ -52,12 +52,24 @@ pub fn validate(args: ValidateArgs) -> Result<()> {
     }
     if model.collision().is_some() {
         let (pairs, inside) = sim.intersections();
+        let t = sim.tangled();
         if pairs == 0 && inside == 0 {
             out.push_str("initial state: no intersection\n");
         } else {
+            let when = if scene.preroll_steps() > 0 {
+                "the pre-roll"
+            } else {
+                "the first steps (no pre-roll)"
+            };
             out.push_str(&format!(
-                "initial state: INTERSECTS: {pairs} intersecting cloth triangle pairs, {inside} vertices inside colliders (the run reports them and continues; they are not repaired)\n"
+                "initial state: tangled: {} cloth vertices start inside colliders, {} cloth triangle pairs start crossed; {when} pushes the vertices out and lets the crossings separate\n",
+                t.inside, t.crossings
             ));
+            if pairs > t.crossings || inside > t.inside {
+                out.push_str(&format!(
+                    "initial state: INTERSECTS beyond that: {pairs} intersecting cloth triangle pairs, {inside} vertices inside colliders in all (pinned or handle vertices are not pushed; crossings need self_collision); they are not repaired\n"
+                ));
+            }
         }
     }
     out.push_str(&format!(

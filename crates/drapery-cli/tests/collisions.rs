@@ -226,7 +226,7 @@ fn validate_prints_colliders_settings_and_the_initial_state() {
 }
 
 #[test]
-fn a_run_starting_inside_a_collider_warns_once_and_continues() {
+fn a_run_starting_inside_a_collider_says_so_and_pushes_it_out_in_the_first_steps() {
     // the middle vertex of the sheet (y = 0.5) starts 1 mm inside a sphere around (0, 0.2, 0)
     let text =
         format!("{BASE}\n[[collider]]\nshape = \"sphere\"\ncenter = [0, 0.2, 0]\nradius = 0.301\n");
@@ -234,11 +234,13 @@ fn a_run_starting_inside_a_collider_warns_once_and_continues() {
     let out = t.path().join("out");
     let v = drapery(&["validate".as_ref(), s.as_os_str()]);
     assert!(
-        v.stdout
-            .contains("initial state: INTERSECTS: 0 intersecting cloth triangle pairs, 1 vertices inside colliders"),
+        v.stdout.contains(
+            "initial state: tangled: 1 cloth vertices start inside colliders, 0 cloth triangle pairs start crossed; the first steps (no pre-roll) push"
+        ),
         "{}",
         v.stdout
     );
+    assert!(!v.stdout.contains("INTERSECTS"), "{}", v.stdout);
     let r = drapery(&[
         "run".as_ref(),
         s.as_os_str(),
@@ -250,12 +252,12 @@ fn a_run_starting_inside_a_collider_warns_once_and_continues() {
     let lines: Vec<&str> = r.stderr.lines().collect();
     assert_eq!(lines.len(), 1, "{}", r.stderr);
     assert!(
-        lines[0].starts_with("warning: ") && lines[0].contains("initial state already intersects"),
+        lines[0].contains("the cloth starts tangled (1 vertices inside colliders, 0 crossed cloth triangle pairs); at frame 0 (no pre-roll: the first steps untangle): 1 inside, 0 crossed"),
         "{}",
         lines[0]
     );
     assert!(out.join("frame_00002.obj").exists());
-    // and check finds the penetration in frame 0 and exits 1
+    // check finds the penetration in frame 0 only: the first steps pushed the vertex out
     let c = drapery(&[
         "check".as_ref(),
         out.as_os_str(),
@@ -265,12 +267,12 @@ fn a_run_starting_inside_a_collider_warns_once_and_continues() {
     assert_eq!(c.code, Some(1), "{}", c.stdout);
     assert!(
         c.stdout
-            .contains("frame 0 (t = 0 s): 0 intersecting cloth triangle pairs"),
+            .contains("frame 0 (t = 0 s): 0 intersecting cloth triangle pairs, 1 vertices inside"),
         "{}",
         c.stdout
     );
     assert!(
-        c.stdout.lines().last().unwrap().contains("intersect"),
+        c.stdout.lines().last().unwrap().contains("1 of 3 frames"),
         "{}",
         c.stdout
     );

@@ -3,7 +3,8 @@
 //!
 //! [`Simulation::snapshot`] takes what a step depends on that changes from step to step: every
 //! position and velocity, the solver's warm start (the previous step's velocity change), the
-//! simulated time and the step count. [`Simulation::restore_snapshot`] puts it back into a simulation
+//! simulated time, the step count and what is still being untangled ([`crate::step::tangles`]:
+//! the vertices being pushed out of colliders and the crossed triangle pairs). [`Simulation::restore_snapshot`] puts it back into a simulation
 //! built from the same scene (same model and settings); stepping on from there gives bit for
 //! bit what the uninterrupted run gives. Everything else a step uses is rebuilt from the model
 //! at [`Simulation::new`] and does not change during a run.
@@ -11,9 +12,12 @@
 //! [`Snapshot::to_bytes`] / [`Snapshot::from_bytes`] store it exactly (every f64 as its bits)
 //! with a free-form header of the front end's (the CLI keeps its frame index, output formats
 //! and the scene fingerprint there, see [`crate::fingerprint`]). Layout, little endian: the
-//! magic `DRAPERY-STATE-3\n`, u64 header length + header bytes, u64 steps, u64 time bits, u64
-//! particle count n, 3n f64 positions, 3n f64 velocities, 3n f64 warm start, and a u64 FNV-1a
-//! checksum ([`Fnv`]) of everything before it.
+//! magic `DRAPERY-STATE-4\n`, u64 header length + header bytes, u64 steps, u64 time bits, u64
+//! particle count n, 3n f64 positions, 3n f64 velocities, 3n f64 warm start, u64 1 when the
+//! starting tangles were found (else 0), u64 count + that many (u64 particle, u64 obstacle)
+//! being pushed out, u64 count + that many (u64, u64) crossed triangle pairs, and a u64 FNV-1a
+//! checksum ([`Fnv`]) of everything before it. A `DRAPERY-STATE-3` file (the same without the
+//! tangles) is read as having none left.
 
 use crate::error::{Error, Result};
 use crate::fingerprint::Fnv;
@@ -21,7 +25,9 @@ use crate::math::Vec3;
 use crate::step::Simulation;
 
 /// The magic of the current layout.
-const MAGIC: &[u8] = b"DRAPERY-STATE-3\n";
+const MAGIC: &[u8] = b"DRAPERY-STATE-4\n";
+/// The layout before the tangles.
+const MAGIC_3: &[u8] = b"DRAPERY-STATE-3\n";
 /// What every version's magic starts with (`DRAPERY-STATE-2\n` was the CLI's own layout).
 const MAGIC_FAMILY: &[u8] = b"DRAPERY-STATE-";
 
@@ -34,6 +40,8 @@ pub struct Snapshot {
     x: Vec<Vec3>,
     v: Vec<Vec3>,
     warm_start: Vec<Vec3>,
+    /// Whether the starting tangles were found, then the pushed vertices and the crossings.
+    tangles: (bool, Vec<[u32; 2]>, Vec<[u32; 2]>),
 }
 
 impl Simulation {
@@ -47,6 +55,11 @@ impl Simulation {
             x: self.model.x.clone(),
             v: self.model.v.clone(),
             warm_start: self.warm_start.clone(),
+            tangles: (
+                self.tangles.found,
+                self.tangles.inside.clone(),
+                self.tangles.crossings.clone(),
+            ),
         }
     }
 
@@ -61,6 +74,26 @@ impl Simulation {
                 s.particle_count()
             )));
         }
+        let (found, inside, crossings) = &s.tangles;
+        let (tris, obstacles) = (self.triangles.len(), self.model.obstacles.len());
+        if inside
+            .iter()
+            .any(|&[p, k]| p as usize >= n || k as usize >= obstacles)
+            || crossings
+                .iter()
+                .any(|c| c.iter().any(|&t| t as usize >= tris))
+        {
+            return Err(Error::Invalid(
+                "the snapshot's tangles name particles, colliders or triangles this scene does not have: not a state of this scene".into(),
+            ));
+        }
+        self.tangles = crate::step::tangles::Tangles::restored(
+            *found,
+            inside.clone(),
+            crossings.clone(),
+            &self.triangles,
+            n,
+        );
         self.model.x.clone_from(&s.x);
         self.model.v.clone_from(&s.v);
         self.warm_start.clone_from(&s.warm_start);
@@ -127,6 +160,16 @@ impl Snapshot {
                 }
             }
         }
+        let (found, inside, crossings) = &self.tangles;
+        out.extend_from_slice(&(*found as u64).to_le_bytes());
+        for list in [inside, crossings] {
+            out.extend_from_slice(&(list.len() as u64).to_le_bytes());
+            for e in list {
+                for v in e {
+                    out.extend_from_slice(&(*v as u64).to_le_bytes());
+                }
+            }
+        }
         let sum = Fnv::new().bytes(&out).finish();
         out.extend_from_slice(&sum.to_le_bytes());
         out
@@ -135,7 +178,8 @@ impl Snapshot {
     /// Reads [`Snapshot::to_bytes`]'s bytes back; an [`Error::Invalid`] saying what is wrong
     /// when they are not a snapshot of this version, are cut short or damaged.
     pub fn from_bytes(b: &[u8]) -> Result<Snapshot> {
-        if !b.starts_with(MAGIC) {
+        let v3 = b.starts_with(MAGIC_3);
+        if !b.starts_with(MAGIC) && !v3 {
             let head = &b[..b.len().min(32)];
             return Err(match head.iter().position(|&c| c == b'\n') {
                 Some(end) if head.starts_with(MAGIC_FAMILY) => Error::Invalid(format!(
@@ -163,12 +207,42 @@ impl Snapshot {
         let time = f64::from_bits(r.u64().ok_or_else(short)?);
         let n = r.u64().ok_or_else(short)?;
         let rest = (body.len() - r.at) as u64;
-        if n.checked_mul(72) != Some(rest) {
+        let state = n.checked_mul(72).filter(|&s| s <= rest);
+        if state.is_none() || (v3 && state != Some(rest)) {
             return Err(damaged("the particle count does not match the length"));
         }
         let n = n as usize;
         let mut vecs = || decode_vecs(r.take(24 * n).unwrap_or_default());
         let (x, v, warm_start) = (vecs(), vecs(), vecs());
+        let tangles = if v3 {
+            (true, Vec::new(), Vec::new())
+        } else {
+            let misfit =
+                || damaged("the particle count or a list length does not match the length");
+            let found = r.u64().ok_or_else(misfit)? == 1;
+            let mut list = || -> Result<Vec<[u32; 2]>> {
+                let len = r.u64().ok_or_else(misfit)?;
+                let left = (body.len() - r.at) as u64;
+                if len.checked_mul(16).is_none_or(|b| b > left) {
+                    return Err(misfit());
+                }
+                (0..len)
+                    .map(|_| {
+                        let mut e = [0u32; 2];
+                        for v in &mut e {
+                            let w = r.u64().ok_or_else(misfit)?;
+                            *v = u32::try_from(w).map_err(|_| damaged("an index out of range"))?;
+                        }
+                        Ok(e)
+                    })
+                    .collect()
+            };
+            let (inside, crossings) = (list()?, list()?);
+            if r.at != body.len() {
+                return Err(misfit());
+            }
+            (found, inside, crossings)
+        };
         Ok(Snapshot {
             header,
             time,
@@ -176,6 +250,7 @@ impl Snapshot {
             x,
             v,
             warm_start,
+            tangles,
         })
     }
 }
@@ -291,7 +366,23 @@ mod tests {
                 Vec3::new(0.25, -0.0, 1e-5),
                 Vec3::new(f64::MIN_POSITIVE, 2.0, 3.0),
             ],
+            tangles: (true, vec![[1, 0]], vec![[0, 3], [2, u32::MAX]]),
         }
+    }
+
+    /// A state of the layout before the tangles reads as the same state with none left.
+    #[test]
+    fn a_version_3_state_reads_with_no_tangles() {
+        let mut s = sample();
+        let b = s.to_bytes();
+        // version 3: the same up to the warm start, without the tangles section
+        let tangles = 8 + (8 + 16) + (8 + 2 * 16);
+        let mut old = b[..b.len() - 8 - tangles].to_vec();
+        old[..MAGIC.len()].copy_from_slice(MAGIC_3);
+        let sum = Fnv::new().bytes(&old).finish();
+        old.extend_from_slice(&sum.to_le_bytes());
+        s.tangles = (true, Vec::new(), Vec::new());
+        assert_eq!(Snapshot::from_bytes(&old).unwrap(), s);
     }
 
     #[test]

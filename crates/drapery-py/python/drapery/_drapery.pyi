@@ -101,6 +101,9 @@ class Simulation:
     def steps(self) -> int:
         """Steps taken since the initial state."""
     @property
+    def tangled(self) -> tuple[int, int]:
+        """What is still tangled: (vertices inside colliders, crossed cloth triangle pairs)."""
+    @property
     def frame(self) -> int:
         """Whole frames of steps taken: steps // scene.steps_per_frame."""
     @property

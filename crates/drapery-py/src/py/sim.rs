@@ -216,6 +216,14 @@ impl PySimulation {
         self.sim.steps()
     }
 
+    /// What is still tangled, `(vertices inside colliders, crossed cloth triangle pairs)`:
+    /// after the pre-roll, what it did not untangle (the next steps go on with it).
+    #[getter]
+    fn tangled(&self) -> (usize, usize) {
+        let t = self.sim.tangled();
+        (t.inside, t.crossings)
+    }
+
     /// Whole frames of steps taken: steps // scene.steps_per_frame (frame k is the state
     /// `drapery run` writes as frame_k).
     #[getter]

@@ -7,8 +7,8 @@
 //! * [`count_intersections_between`]: the same between two different surfaces (cloth and a mesh
 //!   obstacle), all pairs considered.
 //! * [`count_penetrations`]: vertices whose signed distance to an analytic collider is below
-//!   `-tol`. Mesh colliders have no inside and never count here; use
-//!   [`count_intersections_between`] for them.
+//!   `-tol`, or inside a closed mesh collider deeper than `tol`. Open meshes have no inside and
+//!   never count here; use [`count_intersections_between`] for them.
 //!
 //! Candidate pairs come from the broad phase, so the cost is about linear in the mesh size.
 //! Triangles with a non-finite vertex are skipped.
@@ -32,6 +32,16 @@ pub fn count_sewn_intersections(
     triangles: &[[u32; 3]],
     stitches: &[[u32; 2]],
 ) -> usize {
+    sewn_intersecting_pairs(x, triangles, stitches).len()
+}
+
+/// The intersecting triangle pairs `[i, j]` (`i < j`, indices into `triangles`, in increasing
+/// order) that [`count_sewn_intersections`] counts.
+pub fn sewn_intersecting_pairs(
+    x: &[Vec3],
+    triangles: &[[u32; 3]],
+    stitches: &[[u32; 2]],
+) -> Vec<[u32; 2]> {
     // each vertex's representative: the smallest vertex it is sewn to, through any chain
     let mut rep: Vec<u32> = (0..x.len() as u32).collect();
     fn root(rep: &mut [u32], mut v: u32) -> u32 {
@@ -49,14 +59,17 @@ pub fn count_sewn_intersections(
         rep[v as usize] = root(&mut rep, v);
     }
     let boxes = tri_boxes(x, triangles);
-    overlapping_pairs(&boxes)
+    let mut pairs = overlapping_pairs(&boxes)
         .par_iter()
         .filter(|&&(i, j)| {
             let (a, b) = (triangles[i as usize], triangles[j as usize]);
             let (ra, rb) = (a.map(|v| rep[v as usize]), b.map(|v| rep[v as usize]));
             !ra.iter().any(|v| rb.contains(v)) && triangles_intersect(corners(x, a), corners(x, b))
         })
-        .count()
+        .map(|&(i, j)| [i.min(j), i.max(j)])
+        .collect::<Vec<_>>();
+    pairs.sort_unstable();
+    pairs
 }
 
 /// Number of intersecting pairs (triangle of `a`, triangle of `b`) between two surfaces.
@@ -79,13 +92,19 @@ pub fn count_intersections_between(
         .count()
 }
 
-/// Number of points with signed distance `< -tol` to at least one analytic collider at time `t`.
+/// Number of points deeper than `tol` inside at least one collider at time `t`: signed
+/// distance `< -tol` to a solid, or inside a closed mesh ([`Collider::inside_at`]) farther than
+/// `tol` from its surface. Open meshes have no inside.
 pub fn count_penetrations(x: &[Vec3], colliders: &[Collider], t: f64, tol: f64) -> usize {
+    let insides: Vec<_> = colliders
+        .iter()
+        .filter_map(|c| c.inside_at(t).map(|i| (c, i)))
+        .collect();
     x.par_iter()
         .filter(|&&p| {
-            colliders
+            insides
                 .iter()
-                .any(|c| c.is_solid() && c.closest(p, t).signed_distance < -tol)
+                .any(|(c, i)| i.contains(p) && c.closest(p, t).signed_distance.abs() > tol)
         })
         .count()
 }

@@ -21,7 +21,6 @@ use super::ccd::{
     vertex_triangle_may_touch, vertex_triangle_toi,
 };
 use super::distance::{point_triangle, segment_segment};
-use super::seams::Seams;
 use super::settings::Obstacle;
 use crate::math::Vec3;
 use rayon::prelude::*;
@@ -166,7 +165,9 @@ fn sweep(o: &Obstacle, x0: Vec3, x1: Vec3, t0: f64, h: f64, stop: f64) -> Option
 }
 
 /// Makes the end-of-step positions `x1` free of crossings (see the module docs), letting
-/// through the cloth pairs within a stitched neighbourhood of `seams` so that seams can close.
+/// through the contact pairs for which `exempt` is true (those within a stitched neighbourhood,
+/// so that seams can close, [`super::seams::Seams::exempt`]; starting tangles). Pair particles
+/// from `x0.len()` on are obstacle vertices.
 /// Returns the report, or a message when collisions could not be resolved.
 #[allow(clippy::too_many_arguments)]
 pub fn failsafe(
@@ -180,7 +181,7 @@ pub fn failsafe(
     h: f64,
     thickness: f64,
     self_collision: bool,
-    seams: &Seams,
+    exempt: &(dyn Fn(&[u32; 4]) -> bool + Sync),
 ) -> Result<FailsafeReport, String> {
     let n = x0.len();
     let mut report = FailsafeReport::default();
@@ -269,7 +270,7 @@ pub fn failsafe(
     let is_cloth = |i: u32| (i as usize) < n;
     let keep = |ids: &[u32; 4]| {
         let cloth = ids.iter().filter(|&&i| is_cloth(i)).count();
-        cloth > 0 && (cloth < ids.len() || self_collision) && !seams.exempt(ids)
+        cloth > 0 && (cloth < ids.len() || self_collision) && !exempt(ids)
     };
     let impact = |ids: [u32; 4], vt: bool, ye: &[Vec3]| {
         keep(&ids).then(|| impact(ids, vt, &ys0, ye, tol)).flatten()
@@ -490,7 +491,7 @@ mod tests {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                 pool.install(|| {
                     let mut got = x1.clone();
-                    let r = failsafe(&x0, &mut got, &pinned, &tris, &edges, &[], 0.0, 0.01, 0.005, true, &crate::collision::seams::Seams::default());
+                    let r = failsafe(&x0, &mut got, &pinned, &tris, &edges, &[], 0.0, 0.01, 0.005, true, &|_| false);
                     (got, r)
                 })
             };
@@ -540,7 +541,7 @@ mod tests {
                 0.01,
                 thickness,
                 true,
-                &crate::collision::seams::Seams::default(),
+                &|_| false,
             );
             r.unwrap();
             x = x1;
@@ -568,7 +569,7 @@ mod tests {
             0.01,
             0.005,
             true,
-            &crate::collision::seams::Seams::default(),
+            &|_| false,
         )
         .unwrap_err();
         assert!(e.contains("particles 0 (pinned)"), "{e}");

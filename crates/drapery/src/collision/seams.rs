@@ -18,6 +18,14 @@ impl Seams {
     /// The neighbourhoods of the stitched pairs `stitches` over `n` particles and the cloth
     /// `triangles`.
     pub fn new(n: usize, triangles: &[[u32; 3]], stitches: &[[u32; 2]]) -> Seams {
+        let groups: Vec<&[u32]> = stitches.iter().map(|s| &s[..]).collect();
+        Seams::around(n, triangles, &groups)
+    }
+
+    /// The neighbourhoods of any groups of particles: each group and every particle sharing a
+    /// triangle with one of its members (a stitched pair is a group of two; a pair of crossed
+    /// triangles, [`crate::step`]'s starting tangles, a group of six).
+    pub fn around(n: usize, triangles: &[[u32; 3]], stitches: &[&[u32]]) -> Seams {
         if stitches.is_empty() {
             return Seams::default();
         }
@@ -31,7 +39,7 @@ impl Seams {
         let mut members: Vec<Vec<u32>> = vec![Vec::new(); n];
         for (s, pair) in stitches.iter().enumerate() {
             let mut hood: Vec<u32> = pair.to_vec();
-            for &end in pair {
+            for &end in pair.iter() {
                 for &t in &around[end as usize] {
                     hood.extend_from_slice(&triangles[t as usize]);
                 }

@@ -2,15 +2,16 @@
 //!
 //! * obstacle contacts: candidates of the active set ([`crate::constraints::obstacle::find`]);
 //! * cloth–cloth contacts: vertex–triangle and edge–edge pairs closer than the thickness become
-//!   repulsion stencils ([`Repulsions`]) whose Jacobians enter the system matrix, except those
-//!   within a stitched neighbourhood ([`Seams`]), which must be free to close.
+//!   repulsion stencils ([`Repulsions`]) whose Jacobians enter the system matrix, except the
+//!   exempt ones: those within a stitched neighbourhood ([`Seams`]), which must be free to
+//!   close, and those around a crossing the cloth started with ([`super::tangles`]), which
+//!   repulsion would hold crossed.
 
 use super::guard::Start;
 use super::pose::Pose;
 use crate::collision::broad_phase::candidates;
 use crate::collision::proximity::proximities;
 use crate::collision::repulsion::Penalty;
-use crate::collision::seams::Seams;
 use crate::constraints::obstacle::{self, ObstacleContact};
 use crate::forces::Repulsions;
 use crate::model::Model;
@@ -31,7 +32,7 @@ pub(crate) fn contacts(
     edges: &[[u32; 2]],
     start: &Start,
     pose: &Pose,
-    seams: &Seams,
+    exempt: &(dyn Fn(&[u32; 4]) -> bool + Sync),
 ) -> Contacts {
     let Some(c) = &model.collision else {
         return Contacts::default();
@@ -51,7 +52,7 @@ pub(crate) fn contacts(
         let cand = candidates(x0, x0, triangles, edges, c.thickness);
         let mut stencils = proximities(x0, triangles, edges, &cand, c.thickness);
         stencils.retain(|s| {
-            s.particles.iter().any(|&p| !pose.pinned[p as usize]) && !seams.exempt(&s.particles)
+            s.particles.iter().any(|&p| !pose.pinned[p as usize]) && !exempt(&s.particles)
         });
         (!stencils.is_empty()).then(|| {
             Repulsions::new(
@@ -75,6 +76,7 @@ pub(crate) fn contacts(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::collision::seams::Seams;
     use crate::math::Vec3;
     use crate::step::{pose, testing};
 
@@ -93,7 +95,7 @@ mod tests {
         }
         let (tris, edges) = (m.triangles(), m.edges());
         let pose = pose::at(&m, 0.0, h);
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &Seams::default());
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &|_| false);
         assert!(
             !c.obstacle.is_empty(),
             "particles 2 mm above the ground touch it"
@@ -105,12 +107,12 @@ mod tests {
         // pin every particle: no stencil and no obstacle contact is left
         m.pinned = vec![true; m.particle_count()];
         let pose = pose::at(&m, 0.0, h);
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &Seams::default());
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &|_| false);
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
         // collisions off: nothing
         m.collision = None;
         m.pinned = vec![false; m.particle_count()];
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &Seams::default());
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &|_| false);
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
     }
 
@@ -131,7 +133,7 @@ mod tests {
         let pose = pose::at(&m, 0.0, 0.01);
         let n = m.particle_count();
         let count = |seams: &Seams| {
-            contacts(&m, &tris, &edges, &start, &pose, seams)
+            contacts(&m, &tris, &edges, &start, &pose, &|ids| seams.exempt(ids))
                 .repulsions
                 .map_or(0, |r| r.stencils.len())
         };

@@ -5,13 +5,13 @@
 
 use super::pose::Pose;
 use crate::collision::failsafe::failsafe;
-use crate::collision::seams::Seams;
 use crate::collision::settings::CollisionSettings;
 use crate::math::Vec3;
 use crate::model::Model;
 
-/// Corrects the end-of-step positions `x` (and the velocities of the particles it moved);
-/// returns the colliding pairs CCD found, or why collisions could not be resolved.
+/// Corrects the end-of-step positions `x` (and the velocities of the particles it moved),
+/// letting through the pairs `exempt` names (see [`failsafe`]); returns the colliding pairs CCD
+/// found, or why collisions could not be resolved.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run(
     model: &Model,
@@ -19,7 +19,7 @@ pub(crate) fn run(
     triangles: &[[u32; 3]],
     edges: &[[u32; 2]],
     pose: &Pose,
-    seams: &Seams,
+    exempt: &(dyn Fn(&[u32; 4]) -> bool + Sync),
     x0: &[Vec3],
     x: &mut [Vec3],
     v: &mut [Vec3],
@@ -37,7 +37,7 @@ pub(crate) fn run(
         h,
         settings.thickness,
         settings.self_collision,
-        seams,
+        exempt,
     )?;
     let mut keep_velocity = vec![false; x.len()];
     r.projected
@@ -54,6 +54,7 @@ pub(crate) fn run(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::collision::seams::Seams;
     use crate::constraints::pins::PinTargets;
     use crate::step::testing;
 
@@ -81,7 +82,7 @@ mod tests {
             &[],
             &[],
             &pose,
-            &Seams::default(),
+            &|_| false,
             &x0,
             &mut x,
             &mut v,
@@ -115,7 +116,15 @@ mod tests {
         let end = |seams: &Seams| {
             let (mut x, mut v) = (x1.clone(), vec![Vec3::ZERO; 16]);
             run(
-                &m, &settings, &tris, &edges, &pose, seams, &x0, &mut x, &mut v,
+                &m,
+                &settings,
+                &tris,
+                &edges,
+                &pose,
+                &|ids| seams.exempt(ids),
+                &x0,
+                &mut x,
+                &mut v,
             )
             .unwrap();
             x

@@ -7,7 +7,7 @@
 //! | stage | module | does |
 //! |---|---|---|
 //! | guard | [`guard`] | a valid step size and a finite starting state |
-//! | pose | [`pose`] | colliders and pin targets over `[t, t + h]` |
+//! | pose | [`pose`] | colliders and pin targets over `[t, t + h]`; cloth starting inside a collider pushed out ([`tangles`]) |
 //! | detect | [`detect`] | obstacle contact candidates, self-contact stencils |
 //! | linearize | [`linearize`] | forces, `A`, right-hand side (per Newton iteration) |
 //! | constrain, solve | [`solve`] | filter `S` and `z`, filtered PCG on the obstacle active set |
@@ -34,11 +34,13 @@ pub mod settings;
 mod solve;
 mod strain;
 mod system;
+pub mod tangles;
 #[cfg(test)]
 mod testing;
 
 pub use report::{StageTimes, StepReport};
 pub use settings::{LinearSolver, SolverSettings};
+pub use tangles::Tangled;
 
 use crate::collision::seams::Seams;
 use crate::constraints::obstacle::ActiveSet;
@@ -58,6 +60,7 @@ use newton::{Outcome, Potential};
 use report::timed;
 use solve::{Problem, Scratch, Solvers};
 use system::System;
+use tangles::Tangles;
 
 /// A model plus the solver's working memory. Advance it with [`Simulation::step`].
 pub struct Simulation {
@@ -76,12 +79,15 @@ pub struct Simulation {
     system: System,
     /// State the simulation was created in (the multigrid's reference, see [`Self::reference`]).
     initial: (Vec<Vec3>, Vec<Vec3>),
-    triangles: Vec<[u32; 3]>,
+    pub(crate) triangles: Vec<[u32; 3]>,
     edges: Vec<[u32; 2]>,
     /// The stitched neighbourhoods exempt from cloth–cloth contact.
     seams: Seams,
     /// The edges of the cloths that have a strain limit.
     strain_limits: StrainLimits,
+    /// Cloth that started inside colliders or crossed, still being untangled (part of the
+    /// state: a snapshot holds it).
+    pub(crate) tangles: Tangles,
     work: Work,
     solvers: Solvers,
 }
@@ -127,6 +133,7 @@ impl Simulation {
             edges,
             seams,
             strain_limits,
+            tangles: Tangles::default(),
             work: Work::default(),
             solvers: Solvers::default(),
         })
@@ -154,10 +161,23 @@ impl Simulation {
         let start = timed(&mut report.stages.guard, || {
             guard::start(&self.model, at, h)
         })?;
+        timed(&mut report.stages.pose, || self.reference(h));
+        // the starting tangles are found at the first step (kept only if the step succeeds)
+        let fresh;
+        let tangles = if self.tangles.found {
+            &self.tangles
+        } else {
+            fresh = Tangles::find(&self.model, &self.triangles, self.time);
+            &fresh
+        };
         let pose = timed(&mut report.stages.pose, || {
-            self.reference(h);
-            pose::at(&self.model, self.time, h)
+            let mut pose = pose::at(&self.model, self.time, h);
+            if let Some(c) = &self.model.collision {
+                tangles.push(&self.model, c.thickness, &mut pose);
+            }
+            pose
         });
+        let n = self.model.particle_count();
         let contacts = timed(&mut report.stages.detect, || {
             let c = detect::contacts(
                 &self.model,
@@ -165,7 +185,7 @@ impl Simulation {
                 &self.edges,
                 &start,
                 &pose,
-                &self.seams,
+                &|ids| self.seams.exempt(ids) || tangles.exempt(ids, n),
             );
             self.system.use_contacts(c.repulsions.as_ref());
             c
@@ -174,7 +194,6 @@ impl Simulation {
         report.self_contacts = repulsions.map_or(0, |r| r.stencils.len());
 
         // Newton iterations on v; x = x₀ + h v except at the first linearization point.
-        let n = self.model.particle_count();
         let mut work = std::mem::take(&mut self.work);
         work.linearized.resize(n);
         work.solve.resize(n);
@@ -248,6 +267,7 @@ impl Simulation {
         let (held, impulse) = active.held();
         report.obstacle_contacts = held.len();
 
+        let mut untangled = None;
         if let Some(c) = &self.model.collision {
             timed(&mut report.stages.friction, || {
                 friction::run(
@@ -276,13 +296,15 @@ impl Simulation {
                     &self.triangles,
                     &self.edges,
                     &pose,
-                    &self.seams,
+                    &|ids| self.seams.exempt(ids) || tangles.exempt(ids, n),
                     &start.x0,
                     &mut x,
                     &mut v,
                 )
             })
             .map_err(|e| at.fail(e))?;
+            let t1 = self.time + h;
+            untangled = Some(tangles.update(&self.model, &self.triangles, &x, t1, c.thickness));
         }
 
         let t = std::time::Instant::now();
@@ -303,6 +325,9 @@ impl Simulation {
         }
         self.model.x = x;
         self.model.v = v;
+        if let Some(t) = untangled {
+            self.tangles = t;
+        }
         self.time += h;
         self.steps += 1;
         report.stages.commit += t.elapsed().as_secs_f64();
@@ -390,7 +415,8 @@ impl Simulation {
     }
 
     /// The pre-roll: `steps` steps of `h` ending at `t = 0`, from `t = -steps·h`, during which
-    /// every prescribed motion holds its pose at 0 at rest ([`crate::animation::motion`]); then
+    /// every prescribed motion holds its pose at 0 at rest ([`crate::animation::motion`]) and
+    /// cloth that starts tangled is untangled ([`tangles`], [`Simulation::tangled`]); then
     /// the clock is set to exactly 0 and the step count to 0, so frame 0 is the settled state.
     /// Nothing happens for 0 steps. On a failed step the error is returned and the simulation
     /// is left at the last good step.
@@ -477,9 +503,21 @@ impl Simulation {
             .assemble(&self.model.mass, &self.forces, &at, None, None);
     }
 
-    /// Cloth triangle pairs that intersect and particles inside analytic obstacles, at the
-    /// current state (what `drapery check` counts). A starting state with intersections is
-    /// reported, not repaired.
+    /// What is still tangled: free cloth vertices being pushed out of colliders and crossed
+    /// cloth triangle pairs being let through the fail-safe ([`tangles`]). Before the first
+    /// step, what the first step will find (a fresh simulation's starting tangles); after a
+    /// pre-roll, what remains of them.
+    pub fn tangled(&self) -> Tangled {
+        if self.tangles.found {
+            self.tangles.counts()
+        } else {
+            Tangles::find(&self.model, &self.triangles, self.time).counts()
+        }
+    }
+
+    /// Cloth triangle pairs that intersect and particles inside solid obstacles or closed
+    /// meshes, at the current state (what `drapery check` counts). A starting state with
+    /// intersections is untangled by the steps ([`Simulation::tangled`]).
     pub fn intersections(&self) -> (usize, usize) {
         // the two ends of a stitched pair count as one vertex (a closed seam's sides touch)
         let sewn: Vec<[u32; 2]> = self.model.stitches.iter().map(|s| [s.a, s.b]).collect();

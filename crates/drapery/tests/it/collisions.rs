@@ -331,7 +331,7 @@ fn a_particle_moving_away_from_an_obstacle_is_not_held_by_it() {
 }
 
 #[test]
-fn a_sheet_starting_deep_inside_a_sphere_is_pushed_out_without_blowing_up() {
+fn a_sheet_starting_deep_inside_a_sphere_is_pushed_out_at_the_push_speed_and_stays_out() {
     let sphere = Obstacle {
         name: None,
         collider: Collider::fixed(Shape::Sphere(Sphere {
@@ -357,15 +357,34 @@ fn a_sheet_starting_deep_inside_a_sphere_is_pushed_out_without_blowing_up() {
     );
     let (_, inside) = s.intersections();
     assert!(inside > 0, "the test needs a starting penetration");
-    for _ in 0..30 {
+    // the deepest vertex is 0.2 m in, pushed out at 0.5 m/s (plus the thickness): 0.42 s,
+    // never faster than that
+    for _ in 0..45 {
         s.step(0.01).unwrap();
+        if s.tangled().inside > 0 {
+            assert!(
+                s.model()
+                    .velocities()
+                    .iter()
+                    .all(|v| v.length() <= 0.5 + 1e-9)
+            );
+        }
     }
+    assert_eq!(s.tangled().inside, 0);
     assert_eq!(
         count_penetrations(s.model().positions(), &colliders(&s), s.time(), 0.0),
         0
     );
-    // pushed out, not launched: nothing moves faster than a few m/s
-    assert!(s.model().velocities().iter().all(|v| v.length() < 3.0));
+    // The sheet is now a dome over the sphere, its corners (outside from the start) held back
+    // by friction: released, it springs back (up to about 20 m/s for a step or two on this
+    // coarse, stiff sheet) and slides off without passing through the sphere.
+    for _ in 0..100 {
+        s.step(0.01).unwrap();
+        assert_eq!(
+            count_penetrations(s.model().positions(), &colliders(&s), s.time(), 0.0),
+            0
+        );
+    }
 }
 
 #[test]

@@ -627,7 +627,7 @@ fn failsafe_keeps_particles_on_their_side_of_a_moving_mesh() {
         h,
         0.005,
         false,
-        &crate::collision::seams::Seams::default(),
+        &|_| false,
     )
     .unwrap();
     assert!(report.ccd_hits >= 4, "{report:?}");

@@ -110,6 +110,28 @@ impl Bvh {
         boxes
     }
 
+    /// Calls `f` with every triangle whose leaf box overlaps `query` (in leaf order), with
+    /// `boxes` from [`Bvh::boxes`].
+    pub fn overlapping(&self, boxes: &[Aabb], query: &Aabb, mut f: impl FnMut(u32)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = vec![0usize];
+        while let Some(ni) = stack.pop() {
+            if !boxes[ni].overlaps(query) {
+                continue;
+            }
+            let node = self.nodes[ni];
+            if node.count > 0 {
+                let (first, count) = (node.first as usize, node.count as usize);
+                self.order[first..first + count].iter().for_each(|&t| f(t));
+            } else {
+                stack.push(node.first as usize + 1);
+                stack.push(node.first as usize);
+            }
+        }
+    }
+
     /// The closest triangle to `p` (`(index, result)`, the lowest index among equals), with
     /// `tri(i)` the corners of triangle `i` and `boxes` from [`Bvh::boxes`] for a placement
     /// that holds every `tri(i)`.

@@ -24,6 +24,8 @@ pub struct TriangleMesh {
     pivot: Vec3,
     bvh: Bvh,
     boxes: Vec<Aabb>,
+    /// Watertight ([`super::interior::is_closed`]): the mesh has an inside.
+    closed: bool,
 }
 
 impl TriangleMesh {
@@ -33,12 +35,14 @@ impl TriangleMesh {
         let triangles = valid_triangles(vertices.len(), triangles);
         let bvh = Bvh::build(&vertices, &triangles);
         let boxes = bvh.boxes(&triangles, &[&vertices]);
+        let closed = super::interior::is_closed(&triangles);
         TriangleMesh {
             vertices,
             triangles,
             pivot: Vec3::ZERO,
             bvh,
             boxes,
+            closed,
         }
     }
 
@@ -69,6 +73,31 @@ impl TriangleMesh {
             self.triangles[i as usize].map(|v| self.vertices[v as usize])
         })
     }
+}
+
+/// The mesh with vertices at the same position merged (the first of each kept, in order) and
+/// the triangles left without area by the merge dropped: tessellations repeat their seam and
+/// pole vertices.
+#[cfg(test)]
+pub(crate) fn welded(vertices: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut first = std::collections::HashMap::new();
+    let mut kept = Vec::new();
+    let map: Vec<u32> = vertices
+        .iter()
+        .map(|p| {
+            let key = [p.x, p.y, p.z].map(|c| (c + 0.0).to_bits());
+            *first.entry(key).or_insert_with(|| {
+                kept.push(*p);
+                kept.len() as u32 - 1
+            })
+        })
+        .collect();
+    let tris = triangles
+        .into_iter()
+        .map(|t| t.map(|i| map[i as usize]))
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
+        .collect();
+    (kept, tris)
 }
 
 /// Triangles whose corners all exist.
@@ -156,6 +185,10 @@ impl Kind for TriangleMesh {
         false
     }
 
+    fn closed(&self) -> bool {
+        self.closed
+    }
+
     fn surface(&self, _t: f64) -> Option<(Vec<Vec3>, &[[u32; 3]])> {
         Some((self.vertices.clone(), &self.triangles))
     }
@@ -168,9 +201,10 @@ impl Kind for TriangleMesh {
 
     fn describe(&self) -> String {
         format!(
-            "mesh of {} vertices, {} triangles (turns about {})",
+            "mesh of {} vertices, {} triangles{} (turns about {})",
             self.vertices.len(),
             self.triangles.len(),
+            if self.closed { ", closed" } else { "" },
             super::v3(self.pivot)
         )
     }

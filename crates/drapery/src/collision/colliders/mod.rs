@@ -24,8 +24,9 @@
 mod bvh;
 mod capsule;
 mod cuboid;
+pub mod interior;
 pub mod keys;
-mod mesh;
+pub(crate) mod mesh;
 mod plane;
 mod sequence;
 mod sphere;
@@ -64,6 +65,11 @@ pub trait Kind: Sized {
     /// provide [`Kind::surface`].
     fn solid(&self) -> bool {
         true
+    }
+    /// For surface kinds: true when the triangles are watertight, so that the surface encloses
+    /// an inside ([`interior`]).
+    fn closed(&self) -> bool {
+        false
     }
     /// For surface kinds: the vertices at time `t` and the triangles, for CCD. `None` for solids.
     fn surface(&self, _t: f64) -> Option<(Vec<Vec3>, &[[u32; 3]])> {
@@ -279,6 +285,11 @@ impl Shape {
         dispatch!(self, s => s.solid())
     }
 
+    /// See [`Kind::closed`].
+    pub fn is_closed(&self) -> bool {
+        dispatch!(self, s => s.closed())
+    }
+
     /// Surface kinds: vertices at `t` and triangles (see [`Kind::surface`]).
     pub fn surface(&self, t: f64) -> Option<(Vec<Vec3>, &[[u32; 3]])> {
         dispatch!(self, s => s.surface(t))
@@ -322,6 +333,25 @@ pub struct Collider {
     pub shape: Shape,
     /// Its motion about the shape's center.
     pub motion: Motion,
+}
+
+/// The inside of a collider at one time ([`Collider::inside_at`]).
+#[derive(Clone, Debug)]
+pub enum Inside<'a> {
+    /// A solid at a time: the points of negative signed distance.
+    Solid(&'a Collider, f64),
+    /// A closed surface, posed.
+    Closed(interior::Interior<'a>),
+}
+
+impl Inside<'_> {
+    /// True when `p` is strictly inside.
+    pub fn contains(&self, p: Vec3) -> bool {
+        match self {
+            Inside::Solid(c, t) => c.closest(p, *t).signed_distance < 0.0,
+            Inside::Closed(i) => i.contains(p),
+        }
+    }
 }
 
 /// Result of a closest-point query.
@@ -436,6 +466,19 @@ impl Collider {
     /// True for solids (see [`Shape::is_solid`]).
     pub fn is_solid(&self) -> bool {
         self.shape.is_solid()
+    }
+
+    /// Its inside at time `t` ([`interior`]): solids by the sign of the distance, closed
+    /// surfaces by ray parity; `None` for an open surface, which has none.
+    pub fn inside_at(&self, t: f64) -> Option<Inside<'_>> {
+        if self.is_solid() {
+            return Some(Inside::Solid(self, t));
+        }
+        if !self.shape.is_closed() {
+            return None;
+        }
+        let (v, tris) = self.surface(t)?;
+        Some(Inside::Closed(interior::Interior::closed(v, tris)))
     }
 
     /// Surface kinds: the triangles' corners in world coordinates at `t`, and the triangles.

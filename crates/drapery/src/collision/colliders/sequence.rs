@@ -34,6 +34,8 @@ pub struct MeshSequence {
     boxes: Vec<Vec<Aabb>>,
     /// Largest vertex speed per interval, m/s.
     speeds: Vec<f64>,
+    /// Watertight ([`super::interior::is_closed`]): the surface has an inside.
+    closed: bool,
 }
 
 impl MeshSequence {
@@ -56,6 +58,7 @@ impl MeshSequence {
                 .fold(0.0, f64::max);
             speeds.push(speed);
         }
+        let closed = super::interior::is_closed(&triangles);
         MeshSequence {
             frames,
             triangles,
@@ -64,6 +67,7 @@ impl MeshSequence {
             bvh,
             boxes,
             speeds,
+            closed,
         }
     }
 
@@ -281,6 +285,10 @@ impl Kind for MeshSequence {
         false
     }
 
+    fn closed(&self) -> bool {
+        self.closed
+    }
+
     fn surface(&self, t: f64) -> Option<(Vec<Vec3>, &[[u32; 3]])> {
         Some((self.vertices_at(t), &self.triangles))
     }
@@ -321,11 +329,12 @@ impl Kind for MeshSequence {
 
     fn describe(&self) -> String {
         format!(
-            "mesh sequence of {} files at {} per second, {} vertices, {} triangles (turns about {})",
+            "mesh sequence of {} files at {} per second, {} vertices, {} triangles{} (turns about {})",
             self.frames.len(),
             self.rate,
             self.frames.first().map_or(0, Vec::len),
             self.triangles.len(),
+            if self.closed { ", closed" } else { "" },
             super::v3(self.pivot)
         )
     }
