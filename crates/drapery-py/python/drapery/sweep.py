@@ -132,7 +132,10 @@ def _assign(scene: Dict[str, Any], path: str, value: Any) -> None:
 
 def _unknown_key(message: str, path: str) -> bool:
     """Whether the loader's message refuses a key of `path` as unknown."""
-    m = re.search(r"unknown field `([^`]*)`", message)
+    # serde's wording (most tables) or the typed key reader's (cloth, collider, garment, ...)
+    m = re.search(r"unknown field `([^`]*)`", message) or re.search(
+        r"\.([A-Za-z0-9_]+): unknown key of", message
+    )
     return m is not None and m.group(1) in path.split(".")
 
 
