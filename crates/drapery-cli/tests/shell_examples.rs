@@ -52,7 +52,12 @@ fn the_balloon_inflates_and_lands_on_the_ground() {
     let v = volume(frames.last().unwrap(), &tris);
     assert!(v > 1.2 * v0, "volume {v} vs {v0} at rest");
     // it fell onto the plane and rests on it: its lowest point at the contact thickness
-    let low = frames.last().unwrap().iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+    let low = frames
+        .last()
+        .unwrap()
+        .iter()
+        .map(|p| p.y)
+        .fold(f64::INFINITY, f64::min);
     assert!((0.0..0.02).contains(&low), "lowest point at {low} m");
     assert!(mean(frames.last().unwrap()).y < mean(&frames[0]).y - 0.1);
 }
@@ -61,7 +66,10 @@ fn the_balloon_inflates_and_lands_on_the_ground() {
 fn the_strain_limited_sheet_keeps_every_edge_within_its_limit() {
     let (_t, scene, frames) = run_and_check("strain_limited");
     let cloth = &scene.cloths[0];
-    let limit = cloth.material.strain_limit.expect("the example sets strain_limit");
+    let limit = cloth
+        .material
+        .strain_limit
+        .expect("the example sets strain_limit");
     assert_eq!(limit, 0.05);
     // the sides of the faces (not the quads' diagonals), rest lengths from the rest mesh
     let mut edges: Vec<[usize; 2]> = Vec::new();
@@ -79,7 +87,10 @@ fn the_strain_limited_sheet_keeps_every_edge_within_its_limit() {
     for (k, x) in frames.iter().enumerate() {
         for &[a, b] in &edges {
             let r = (x[a] - x[b]).length() / (rest[a] - rest[b]).length();
-            assert!(r <= (1.0 + limit) * (1.0 + 1e-9), "frame {k}: edge {a}-{b} at {r} × rest");
+            assert!(
+                r <= (1.0 + limit) * (1.0 + 1e-9),
+                "frame {k}: edge {a}-{b} at {r} × rest"
+            );
             most = most.max(r);
         }
     }

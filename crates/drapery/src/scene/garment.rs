@@ -114,16 +114,31 @@ mod tests {
             let m = &c.material;
             assert_eq!(m.model, ClothModel::Shell, "{}", c.name);
             assert_eq!(m.mass, MassSpec::Density(cotton.density), "{}", c.name);
-            assert_eq!(m.shell.stretch_modulus, cotton.stretch_modulus, "{}", c.name);
+            assert_eq!(
+                m.shell.stretch_modulus, cotton.stretch_modulus,
+                "{}",
+                c.name
+            );
             assert_eq!(m.shell.poisson, cotton.poisson, "{}", c.name);
-            assert_eq!(m.shell.shear_modulus, Some(cotton.shear_modulus), "{}", c.name);
-            assert_eq!(m.shell.bending_rigidity, cotton.bending_rigidity, "{}", c.name);
+            assert_eq!(
+                m.shell.shear_modulus,
+                Some(cotton.shear_modulus),
+                "{}",
+                c.name
+            );
+            assert_eq!(
+                m.shell.bending_rigidity, cotton.bending_rigidity,
+                "{}",
+                c.name
+            );
             assert_eq!(m.strain_limit, Some(0.07), "{}", c.name);
             assert_eq!(m.pressure, 3.0, "{}", c.name);
         }
         // and a springs key on a shell garment is an error naming the garment's field
         let bad = text.replace("strain_limit", "stretch_stiffness = 5.0\nstrain_limit");
-        let e = Scene::from_str(&bad, &examples.join("g.toml")).unwrap_err().to_string();
+        let e = Scene::from_str(&bad, &examples.join("g.toml"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("garment[0].stretch_stiffness"), "{e}");
     }
 }

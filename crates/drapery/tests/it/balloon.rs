@@ -149,7 +149,11 @@ fn inflate(r0: f64, levels: usize, y: f64, nu: f64, p: f64) -> (Mesh, Vec<Vec3>)
     for _ in 0..300 {
         sim.step(0.005).unwrap();
     }
-    let speed = sim.velocities().iter().map(|v| v.length()).fold(0.0, f64::max);
+    let speed = sim
+        .velocities()
+        .iter()
+        .map(|v| v.length())
+        .fold(0.0, f64::max);
     assert!(speed < 1e-4 * r0, "not at rest: max speed {speed} m/s");
     (mesh, sim.positions().to_vec())
 }
