@@ -83,3 +83,60 @@ pub(super) fn garment(
         .collect();
     Ok((cloths, stitches))
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::garment::Pattern;
+    use crate::model::{ClothModel, MassSpec};
+    use crate::scene::Scene;
+    use std::path::Path;
+
+    /// The material keys of a `[[garment]]` (shell model, a fabric preset, a strain limit, a
+    /// pressure) reach the cloth of every one of its panels.
+    #[test]
+    fn shell_model_fabric_and_strain_limit_reach_every_panel() {
+        let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+        let text = "[simulation]\nduration = 0.1\ndt = 0.01\nframe_rate = 10\n\n\
+                    [[garment]]\nname = \"top\"\npattern = \"garments/top_specification.json\"\n\
+                    edge_length = 0.05\nmodel = \"shell\"\nmaterial = \"cotton\"\n\
+                    strain_limit = 0.07\npressure = 3.0\n";
+        let scene = Scene::from_str(text, &examples.join("garment_material.toml")).unwrap();
+        let panels = Pattern::load(examples.join("garments/top_specification.json"))
+            .unwrap()
+            .panels;
+        assert!(panels.len() >= 2);
+        assert_eq!(scene.cloths.len(), panels.len());
+        let cotton = crate::textile::fabrics::fabric("cotton").unwrap();
+        for (c, p) in scene.cloths.iter().zip(&panels) {
+            assert_eq!(c.name, format!("top.{}", p.name));
+            let m = &c.material;
+            assert_eq!(m.model, ClothModel::Shell, "{}", c.name);
+            assert_eq!(m.mass, MassSpec::Density(cotton.density), "{}", c.name);
+            assert_eq!(
+                m.shell.stretch_modulus, cotton.stretch_modulus,
+                "{}",
+                c.name
+            );
+            assert_eq!(m.shell.poisson, cotton.poisson, "{}", c.name);
+            assert_eq!(
+                m.shell.shear_modulus,
+                Some(cotton.shear_modulus),
+                "{}",
+                c.name
+            );
+            assert_eq!(
+                m.shell.bending_rigidity, cotton.bending_rigidity,
+                "{}",
+                c.name
+            );
+            assert_eq!(m.strain_limit, Some(0.07), "{}", c.name);
+            assert_eq!(m.pressure, 3.0, "{}", c.name);
+        }
+        // and a springs key on a shell garment is an error naming the garment's field
+        let bad = text.replace("strain_limit", "stretch_stiffness = 5.0\nstrain_limit");
+        let e = Scene::from_str(&bad, &examples.join("g.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("garment[0].stretch_stiffness"), "{e}");
+    }
+}

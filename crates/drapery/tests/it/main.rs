@@ -1,5 +1,6 @@
 //! Integration tests of the drapery library, gathered in one binary (one link step).
 
+mod balloon;
 mod cloth_friction;
 mod collisions;
 mod common;
