@@ -312,6 +312,8 @@ pub fn run(args: RunArgs) -> Result<()> {
     let start = Instant::now();
     let mut cg_total: u64 = 0;
     let mut cg_max: usize = 0;
+    // steps that ended with edges over their strain limit (the projection's cap), and the most
+    let (mut strain_steps, mut strain_most) = (0usize, 0usize);
     let mut steps: u64 = 0;
     let mut writer = Writer::start(RunOutput {
         dir: dir.clone(),
@@ -372,6 +374,10 @@ pub fn run(args: RunArgs) -> Result<()> {
                     steps += 1;
                     cg_total += report.cg_iterations as u64;
                     cg_max = cg_max.max(report.cg_iterations);
+                    if report.strain_over > 0 {
+                        strain_steps += 1;
+                        strain_most = strain_most.max(report.strain_over);
+                    }
                 }
                 Err(e) => {
                     failure = Some(anyhow!(
@@ -429,6 +435,11 @@ pub fn run(args: RunArgs) -> Result<()> {
             start.elapsed().as_secs_f64(),
             mean,
             cg_max,
+        );
+    }
+    if strain_steps > 0 {
+        eprintln!(
+            "warning: the strain limit was not reached on {strain_steps} steps (at most {strain_most} edges over at a step's end: the projection stopped at its pass cap)"
         );
     }
     Ok(())

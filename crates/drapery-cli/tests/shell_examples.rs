@@ -97,3 +97,21 @@ fn the_strain_limited_sheet_keeps_every_edge_within_its_limit() {
     // the limit binds (without it the corners' edges stretch far past 5 %)
     assert!(most > 1.0 + 0.99 * limit, "longest edge only {most} × rest");
 }
+
+/// A sheet so soft that the strain projection runs out of passes on some steps: the run
+/// completes and says so in one warning line; the shipped example (four times stiffer) does not.
+#[test]
+fn a_strain_limit_not_reached_is_reported() {
+    let text = std::fs::read_to_string(common::examples().join("strain_limited.toml")).unwrap();
+    let t = tempfile::tempdir().unwrap();
+    for (modulus, warned) in [("20.0", false), ("5.0", true)] {
+        let scene = t.path().join(format!("soft_{modulus}.toml"));
+        let soft = text.replace("stretch_modulus = 20.0", &format!("stretch_modulus = {modulus}"));
+        std::fs::write(&scene, soft).unwrap();
+        let out = t.path().join(format!("out_{modulus}"));
+        let r = common::drapery(&common::run_args(&scene, &out, &[]));
+        assert_eq!(r.code, Some(0), "{}", r.stderr);
+        let warning = r.stderr.lines().filter(|l| l.contains("strain limit was not reached")).count();
+        assert_eq!(warning, usize::from(warned), "{modulus}: {}", r.stderr);
+    }
+}
