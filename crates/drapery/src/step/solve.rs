@@ -21,7 +21,7 @@ use crate::math::Vec3;
 use rayon::prelude::*;
 
 /// Linear solves per Newton iteration at most. The rounds stop as soon as the active set stops
-/// changing (a pile's first contact takes 5 to 7); a cap of 2 left contacts that pull hard held
+/// changing (the pile's first contact steps take 4 to 8); a cap of 2 left contacts that pull hard held
 /// at the end of the step, and which ones depended on rounding (docs/ROUNDING.md).
 pub(crate) const CONTACT_ROUNDS: usize = 8;
 
