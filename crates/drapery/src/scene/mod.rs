@@ -179,6 +179,7 @@ struct ClothTable {
     name: String,
     mesh: Option<String>,
     grid: Option<GridTable>,
+    disc: Option<DiscTable>,
     #[serde(default)]
     pin: Vec<u32>,
     initial_velocity: Option<[f64; 3]>,
@@ -189,13 +190,32 @@ struct ClothTable {
 }
 
 /// The keys of `[[cloth]]` besides the material's.
-const CLOTH_KEYS: &[&str] = &["name", "mesh", "grid", "pin", "initial_velocity", "handle"];
+const CLOTH_KEYS: &[&str] = &[
+    "name",
+    "mesh",
+    "grid",
+    "disc",
+    "pin",
+    "initial_velocity",
+    "handle",
+];
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct GridTable {
     size: [f64; 2],
     resolution: [i64; 2],
+    center: Option<[f64; 3]>,
+    normal: Option<[f64; 3]>,
+}
+
+/// `disc = { radius, edge_length, center, normal }`: a flat disc triangulated in rings
+/// ([`crate::textile::drape::disc`]), e.g. a Cusick drape specimen.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DiscTable {
+    radius: f64,
+    edge_length: f64,
     center: Option<[f64; 3]>,
     normal: Option<[f64; 3]>,
 }
@@ -342,8 +362,8 @@ impl Scene {
         let mut attachments = Vec::new();
         for (i, c) in file.cloth.iter().enumerate() {
             let what = format!("cloth[{i}] '{}': ", c.name);
-            let mesh = match (&c.mesh, &c.grid) {
-                (Some(m), None) => {
+            let mesh = match (&c.mesh, &c.grid, &c.disc) {
+                (Some(m), None, None) => {
                     let mesh_path = dir.join(m);
                     crate::io::obj::read_obj(&mesh_path).map_err(|e| match e {
                         Error::Io { path: p, cause } => Error::input(
@@ -353,15 +373,16 @@ impl Scene {
                         other => other,
                     })?
                 }
-                (None, Some(g)) => grid_mesh(g, &what).map_err(file_err)?,
-                (Some(_), Some(_)) => {
+                (None, Some(g), None) => grid_mesh(g, &what).map_err(file_err)?,
+                (None, None, Some(d)) => disc_mesh(d, &what).map_err(file_err)?,
+                (None, None, None) => {
                     return Err(file_err(format!(
-                        "{what}give either mesh or grid, not both"
+                        "{what}missing field `mesh` (an OBJ file), `grid` or `disc`"
                     )));
                 }
-                (None, None) => {
+                _ => {
                     return Err(file_err(format!(
-                        "{what}missing field `mesh` (an OBJ file) or `grid`"
+                        "{what}give one of mesh, grid and disc, not several"
                     )));
                 }
             };
@@ -609,6 +630,21 @@ fn grid_mesh(g: &GridTable, what: &str) -> std::result::Result<Mesh, String> {
         return Err(format!("{what}grid.normal must be a non-zero vector"));
     }
     Mesh::grid(g.size, res, center, normal).map_err(|e| format!("{what}grid: {e}"))
+}
+
+/// The cloth of a `disc` key: [`crate::textile::drape::disc`] laid in the plane through
+/// `center` normal to `normal`, its texture coordinates (warp `u`, weft `v`) the disc's own
+/// 2-D coordinates in m.
+fn disc_mesh(d: &DiscTable, what: &str) -> std::result::Result<Mesh, String> {
+    let radius = positive(what, "disc.radius", d.radius)?;
+    let edge = positive(what, "disc.edge_length", d.edge_length)?;
+    let center = finite3(what, "disc.center", d.center.unwrap_or(DEFAULT_GRID_CENTER))?;
+    let normal = finite3(what, "disc.normal", d.normal.unwrap_or(DEFAULT_GRID_NORMAL))?;
+    if normal.length() == 0.0 {
+        return Err(format!("{what}disc.normal must be a non-zero vector"));
+    }
+    let flat = crate::textile::drape::disc(radius, edge).map_err(|e| format!("{what}{e}"))?;
+    Ok(flat.placed(center, normal))
 }
 
 #[cfg(test)]
