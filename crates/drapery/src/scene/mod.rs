@@ -60,11 +60,11 @@
 //! `duration·frame_rate` must be a whole number of frames (within 1e-6 relative), at least 1;
 //! frames `0..=frame_count` are produced, frame 0 being the initial state.
 
+use crate::collision::colliders::Keys;
 use crate::collision::settings::{CollisionSettings, Obstacle};
 use crate::error::{Error, Result};
 use crate::math::Vec3;
 use crate::mesh::Mesh;
-use crate::collision::colliders::Keys;
 use crate::model::{ClothDesc, Model, StitchDesc};
 use crate::step::{LinearSolver, Simulation, SolverSettings};
 use serde::Deserialize;
