@@ -450,9 +450,7 @@ impl Model {
             if c.mesh.faces.is_empty() {
                 return Err(Error::field(
                     field("model"),
-                    format!(
-                        "cloth '{name}' has no faces: the shell model acts on triangles and quads"
-                    ),
+                    format!("cloth '{name}' has no faces: the shell model acts on triangles and quads"),
                 ));
             }
         }

@@ -56,7 +56,9 @@ pub fn forces(model: &Model) -> Vec<Box<dyn Force>> {
                         * clamp_factor([area(t), area(u)], [rigid(t), rigid(u)])
                 })
                 .collect();
-            let stencils = (hinges.iter()).map(|(h, _)| h.map(|i| i + o)).collect();
+            let stencils = (hinges.iter())
+                .map(|(h, _)| h.map(|i| i + o))
+                .collect();
             out.push(Box::new(Hinges::new(&rest, stencils, rigidity, s.damping)));
         }
     }

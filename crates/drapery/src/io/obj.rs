@@ -518,11 +518,7 @@ mod tests {
         assert_eq!(tris.len(), 3);
         assert_eq!(tris[1], [[0.0, 0.0], [2.0, 3.0], [0.0, 3.0]]);
         // a face without them (or with a bad one) leaves the whole mesh without
-        for tail in [
-            "f 1/1 2/2 3/3\nf 1 3 4\n",
-            "vt 1\nf 1/5 2/2 3/3\n",
-            "f 1/9 2/2 3/3\n",
-        ] {
+        for tail in ["f 1/1 2/2 3/3\nf 1 3 4\n", "vt 1\nf 1/5 2/2 3/3\n", "f 1/9 2/2 3/3\n"] {
             let m = parse(&format!("{quad}{tail}")).unwrap();
             assert!(m.face_uv.is_empty() && m.triangle_uvs().is_none(), "{tail}");
         }

@@ -125,10 +125,7 @@ mod tests {
         // [[2, 1], [1, 2]] has eigenvalues 1 and 3
         let (mut l, _) = symmetric_eigen(&[[2.0, 1.0], [1.0, 2.0]]);
         l.sort_by(f64::total_cmp);
-        assert!(
-            (l[0] - 1.0).abs() < 1e-14 && (l[1] - 3.0).abs() < 1e-14,
-            "{l:?}"
-        );
+        assert!((l[0] - 1.0).abs() < 1e-14 && (l[1] - 3.0).abs() < 1e-14, "{l:?}");
         // an indefinite one projects to its positive part: λ = 3 with (1, 1)/√2
         let mut a = [[1.0, 2.0], [2.0, 1.0]];
         project_psd(&mut a);

@@ -43,12 +43,7 @@ pub(super) const KEYS: &[&str] = &[
 /// Keys of the springs model only.
 const SPRINGS: &[&str] = &["stretch_stiffness", "shear_stiffness", "bend_stiffness"];
 /// Keys of the shell model only.
-const SHELL: &[&str] = &[
-    "stretch_modulus",
-    "poisson",
-    "shear_modulus",
-    "bending_rigidity",
-];
+const SHELL: &[&str] = &["stretch_modulus", "poisson", "shear_modulus", "bending_rigidity"];
 
 /// The material of the table behind `k`.
 pub(super) fn material(k: &Keys) -> Result<Material> {
@@ -104,8 +99,7 @@ pub(super) fn material(k: &Keys) -> Result<Material> {
             ));
         }
     };
-    let or =
-        |key: &str, default: f64| Ok::<f64, crate::Error>(k.opt_number(key)?.unwrap_or(default));
+    let or = |key: &str, default: f64| Ok::<f64, crate::Error>(k.opt_number(key)?.unwrap_or(default));
     let d = Material::default();
     let mut m = Material {
         stretch_stiffness: or("stretch_stiffness", d.stretch_stiffness)?,
@@ -126,9 +120,7 @@ pub(super) fn material(k: &Keys) -> Result<Material> {
         if let Some(g) = k.opt_number("shear_modulus")? {
             s.shear_modulus = Some(g);
         }
-        s.bending_rigidity = k
-            .opt_pair("bending_rigidity")?
-            .unwrap_or(s.bending_rigidity);
+        s.bending_rigidity = k.opt_pair("bending_rigidity")?.unwrap_or(s.bending_rigidity);
         s.damping = or("damping", s.damping)?;
         m.damping = 0.0;
     }

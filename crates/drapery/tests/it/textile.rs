@@ -70,11 +70,7 @@ fn settle(text: &str) -> ([f64; 2], f64) {
         .map(|i| x[i])
         .collect();
     let mean = tip.iter().copied().sum::<Vec3>() / tip.len() as f64;
-    let speed = sim
-        .velocities()
-        .iter()
-        .map(|v| v.length())
-        .fold(0.0, f64::max);
+    let speed = sim.velocities().iter().map(|v| v.length()).fold(0.0, f64::max);
     ([mean.x, -mean.y], speed)
 }
 
@@ -93,10 +89,7 @@ fn cantilever_matches_the_heavy_elastica_at_three_resolutions() {
             (tip[0] - exact.tip[0]).abs() / exact.tip[0],
             (tip[1] - exact.tip[1]).abs() / exact.tip[1],
         ];
-        eprintln!(
-            "h = {h}: tip {tip:?}, elastica {:?}, error {err:?}",
-            exact.tip
-        );
+        eprintln!("h = {h}: tip {tip:?}, elastica {:?}, error {err:?}", exact.tip);
         // the tip deflection (the drop a cantilever tester reads) within 3 %; the tip's reach
         // within 10 %: the hinges let a narrow strip curl across its width a little (their
         // effective Poisson ratio, docs/MATH.md §21), which steepens the strip near the clamp
