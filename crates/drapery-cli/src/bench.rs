@@ -4,6 +4,9 @@
 //! `hang-N` hangs from two corners; `drape-N` falls on a sphere (self-collision on);
 //! `pile-N` falls on the ground, tilted, and folds onto itself (self-collision on);
 //! `twist-N` is wrung by two handles turning opposite ways (self-collision on).
+//! Two textile scenes on the shell model, `N` their **edge length in mm**: `cantilever-N`, a
+//! 16 cm strip clamped at one end sagging (tests/it/textile.rs), and `cusick-N`, a 30 cm
+//! cotton disc draping over an 18 cm support (tests/it/drape.rs).
 //! Each scene is first advanced by some untimed warm-up frames (so that collision scenes are
 //! in contact; `--warm-up` overrides the count), then `--frames` frames are timed. Each frame is written as OBJ to a temporary
 //! folder through the same writer thread as `drapery run` ([`crate::writer`]): the loop steps,
@@ -30,7 +33,7 @@ use std::time::Instant;
 #[derive(Args)]
 pub struct BenchArgs {
     /// Scenes to run, comma-separated (e.g. hang-64,drape-64); default: all standard scenes
-    /// hang-32,hang-64,hang-128,hang-256,drape-64,drape-128,pile-64,pile-128,twist-64,twist-128.
+    /// hang-32,hang-64,hang-128,hang-256,drape-64,drape-128,pile-64,pile-128,twist-64,twist-128,cantilever-5,cusick-5.
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
     /// Timed frames per run.
@@ -63,6 +66,8 @@ const STANDARD: &[&str] = &[
     "pile-128",
     "twist-64",
     "twist-128",
+    "cantilever-5",
+    "cusick-5",
 ];
 
 /// Checks a scene name `KIND-SIZE`.
