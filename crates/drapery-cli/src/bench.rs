@@ -213,14 +213,13 @@ pub fn bench(args: BenchArgs) -> Result<()> {
                 .map(|_| run_once(&args, s, &dir))
                 .collect::<Result<_>>()?;
             let m = |f: fn(&RunTimes) -> f64| median(runs.iter().map(f).collect());
-            let n: usize = s
-                .split_once('-')
-                .and_then(|(_, n)| n.parse().ok())
-                .unwrap_or(0);
+            // the model's own vertex count (the textile scenes' size is an edge length)
+            let (preset, n) = parse(s)?;
+            let vertices = preset.model(n)?.particle_count();
             println!(
                 "{:<10} {:>8} {:>10.2} {:>6} {:>8.1} {:>10.2} {:>9.2} {:>10.2} {:>8.2} {:>6.2} {:>9}",
                 s,
-                n * n,
+                vertices,
                 m(|r| r.frame_ms),
                 1,
                 m(|r| r.cg),
