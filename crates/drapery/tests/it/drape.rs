@@ -3,8 +3,9 @@
 //! `examples/cusick_support.obj`, a flat top with a sharp rim), and
 //! `drapery::textile::drape::drape_coefficient` measures its shadow:
 //!
-//! * resolution independence: the coefficient at edge lengths 2 cm, 1 cm and 5 mm agrees
-//!   within 0.03;
+//! * resolution independence: the coefficient at edge lengths 1 cm and 5 mm agrees within
+//!   0.03 (at 2 cm, 3 rings across the overhang, it does not: 0.39 against 0.63, not asserted;
+//!   docs/MATERIALS.md §4.4);
 //! * presets: every coefficient lies in (0, 1) and they are ordered like the bending length
 //!   `(B/(ρ g))^{1/3}` (stiffer per weight drapes less), up to the resolution error.
 
@@ -173,4 +174,24 @@ fn cusick_drape_of_matsudaira_s_fabrics_is_ordered_like_the_measurement() {
         runs.push((name.to_string(), c, dc));
     }
     assert_ordered(&runs, 0.03);
+}
+
+#[test]
+fn the_cusick_example_is_the_tested_scene_at_one_centimetre() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/cusick.toml");
+    let example = Scene::load(&path).unwrap();
+    let density = drapery::textile::fabrics::fabric("cotton").unwrap().density;
+    let tested = Scene::from_str(&cusick_scene(0.01, density, "material = \"cotton\""), &path)
+        .unwrap();
+    let (a, b) = (&example.cloths[0], &tested.cloths[0]);
+    assert_eq!(a.mesh.positions, b.mesh.positions);
+    // the file writes the drag 2 ρ h² rounded to its digits
+    let drag = b.material.air_drag;
+    assert!((a.material.air_drag - drag).abs() < 1e-12 * drag);
+    let mut same = a.material;
+    same.air_drag = drag;
+    assert_eq!(same, b.material);
+    assert_eq!(example.obstacles.len(), 1);
+    assert_eq!(example.collision, tested.collision);
+    assert_eq!(example.step_count(), tested.step_count());
 }
