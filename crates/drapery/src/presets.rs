@@ -311,7 +311,10 @@ mod tests {
         assert_eq!(Preset::parse("pile-2").unwrap(), (Preset::Pile, 2));
         assert_eq!(Preset::parse("twist-128").unwrap(), (Preset::Twist, 128));
         assert_eq!(Preset::parse("cusick-10").unwrap(), (Preset::Cusick, 10));
-        assert_eq!(Preset::parse("cantilever-5").unwrap(), (Preset::Cantilever, 5));
+        assert_eq!(
+            Preset::parse("cantilever-5").unwrap(),
+            (Preset::Cantilever, 5)
+        );
         for bad in ["hang", "hang-1", "hang-x", "swing-64", "drape-5000"] {
             assert!(Preset::parse(bad).is_err(), "{bad}");
         }

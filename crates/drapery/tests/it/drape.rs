@@ -181,8 +181,8 @@ fn the_cusick_example_is_the_tested_scene_at_one_centimetre() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/cusick.toml");
     let example = Scene::load(&path).unwrap();
     let density = drapery::textile::fabrics::fabric("cotton").unwrap().density;
-    let tested = Scene::from_str(&cusick_scene(0.01, density, "material = \"cotton\""), &path)
-        .unwrap();
+    let tested =
+        Scene::from_str(&cusick_scene(0.01, density, "material = \"cotton\""), &path).unwrap();
     let (a, b) = (&example.cloths[0], &tested.cloths[0]);
     assert_eq!(a.mesh.positions, b.mesh.positions);
     // the file writes the drag 2 ρ h² rounded to its digits
