@@ -66,8 +66,16 @@ fn table(stdout: &str) -> Vec<Row> {
 /// What every row must say: a scene of n × n vertices, one step per frame, finite times, the
 /// step's time positive and at least that of its stages, collision time only with collisions.
 fn check_row(r: &Row) {
-    let n: usize = r.scene.split_once('-').unwrap().1.parse().unwrap();
-    assert_eq!(r.vertices, n * n, "{}", r.scene);
+    let (kind, n) = r.scene.split_once('-').unwrap();
+    let n: usize = n.parse().unwrap();
+    // the textile scenes' size is the edge length in mm: a 160 mm × 40 mm strip plus the
+    // clamp's column, a 150 mm disc of ⌈150/n⌉ rings of 6k vertices
+    let vertices = match kind {
+        "cantilever" => (160 / n + 2) * (40 / n + 1),
+        "cusick" => 1 + 3 * 150_usize.div_ceil(n) * (150_usize.div_ceil(n) + 1),
+        _ => n * n,
+    };
+    assert_eq!(r.vertices, vertices, "{}", r.scene);
     assert_eq!(r.steps, 1);
     for (what, ms) in [
         ("ms/frame", r.frame_ms),
@@ -90,8 +98,8 @@ fn check_row(r: &Row) {
         "{}: the frame is shorter than its stages",
         r.scene
     );
-    if r.scene.starts_with("hang") {
-        assert_eq!(r.collision_ms, 0.0, "{}: hang has no collisions", r.scene);
+    if r.scene.starts_with("hang") || r.scene.starts_with("cantilever") {
+        assert_eq!(r.collision_ms, 0.0, "{}: no collisions", r.scene);
     } else {
         assert!(r.collision_ms > 0.0, "{}: no collision time", r.scene);
     }
@@ -110,7 +118,7 @@ fn every_standard_scene_runs_one_frame() {
     let rows = table(&r.stdout);
     let names: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
     let standard = documented_scenes();
-    assert_eq!(standard.len(), 10, "{standard:?}");
+    assert_eq!(standard.len(), 12, "{standard:?}");
     assert_eq!(names, standard);
     rows.iter().for_each(check_row);
     // The first step from rest starts the PCG from zero against gravity: it must iterate.
@@ -123,7 +131,7 @@ fn every_preset_runs_one_frame_after_its_warm_up() {
     let r = drapery(&[
         "bench",
         "--scenes",
-        "hang-8,drape-8,pile-8,twist-8",
+        "hang-8,drape-8,pile-8,twist-8,cantilever-20,cusick-20",
         "--frames",
         "1",
         "--runs",
@@ -132,7 +140,10 @@ fn every_preset_runs_one_frame_after_its_warm_up() {
     assert_eq!(r.code, Some(0), "{}", r.stderr);
     let rows = table(&r.stdout);
     let names: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
-    assert_eq!(names, ["hang-8", "drape-8", "pile-8", "twist-8"]);
+    assert_eq!(
+        names,
+        ["hang-8", "drape-8", "pile-8", "twist-8", "cantilever-20", "cusick-20"]
+    );
     rows.iter().for_each(check_row);
 }
 

@@ -51,6 +51,16 @@ pub struct Mesh {
     pub face_uv: Vec<[[f64; 2]; 4]>,
 }
 
+/// A unit vector in the plane normal to the unit `n`: the global x axis projected into it, or
+/// z when x is (nearly) along `n`.
+fn in_plane_axis(n: Vec3) -> Vec3 {
+    let mut u = Vec3::X - n * n.x;
+    if u.length() < 1e-6 {
+        u = Vec3::Z - n * n.z;
+    }
+    u.normalize()
+}
+
 /// Unordered vertex pair key.
 fn key(a: u32, b: u32) -> (u32, u32) {
     if a < b { (a, b) } else { (b, a) }
@@ -324,11 +334,7 @@ impl Mesh {
             ));
         }
         let n = normal / len;
-        let mut u = Vec3::X - n * n.x;
-        if u.length() < 1e-6 {
-            u = Vec3::Z - n * n.z;
-        }
-        let u = u.normalize();
+        let u = in_plane_axis(n);
         let w = u.cross(n);
         let mut positions = Vec::with_capacity(nx * ny);
         for r in 0..ny {
@@ -361,6 +367,34 @@ impl Mesh {
             lines: Vec::new(),
             face_uv,
         })
+    }
+
+    /// This mesh, lying in the plane z = 0, moved to the plane through `center` normal to
+    /// `normal` (non-zero): x goes to the grid's `u` axis ([`Mesh::grid`]), y to `normal × u`,
+    /// so counter-clockwise faces seen from +z face `normal`. Texture coordinates are set to
+    /// the original (x, y), so warp and weft follow x and y.
+    pub fn placed(&self, center: Vec3, normal: Vec3) -> Mesh {
+        let n = normal.normalize();
+        let u = in_plane_axis(n);
+        let v = n.cross(u);
+        let face_uv = (self.faces.iter())
+            .map(|f| {
+                let mut uv = [[0.0; 2]; 4];
+                for (k, &i) in f.indices().iter().enumerate() {
+                    let p = self.positions[i as usize];
+                    uv[k] = [p.x, p.y];
+                }
+                uv
+            })
+            .collect();
+        Mesh {
+            positions: (self.positions.iter())
+                .map(|p| center + u * p.x + v * p.y + n * p.z)
+                .collect(),
+            faces: self.faces.clone(),
+            lines: self.lines.clone(),
+            face_uv,
+        }
     }
 }
 

@@ -11,12 +11,20 @@
 //!   each: the cloth wrings itself into self-contact.
 //!
 //! Drape, pile and twist have collisions on (thickness 5 mm, self-collision, friction 0.3).
+//!
+//! Two textile scenes on the shell model, whose size `N` is the **edge length in mm**:
+//!
+//! * [`Preset::Cantilever`]: the cantilever of `tests/it/textile.rs`, a 16 cm × 4 cm strip
+//!   (B = 10⁻⁴ N·m, 0.1 kg/m², stretch 5000 N/m) clamped level at one end, sagging;
+//! * [`Preset::Cusick`]: the Cusick drape test of `tests/it/drape.rs`, a 30 cm disc of the
+//!   `cotton` preset falling onto an 18 cm support cylinder (mesh collider, no
+//!   self-collision, thickness 2 mm, friction 0.3).
 
 use crate::animation::{Interpolation, Keyframe, Motion, Track};
-use crate::collision::colliders::{Collider, Plane, Shape, Sphere};
+use crate::collision::colliders::{Collider, Plane, Shape, Sphere, TriangleMesh};
 use crate::collision::settings::{CollisionSettings, Obstacle};
 use crate::constraints::handles::HandleDesc;
-use crate::model::{ClothDesc, MassSpec, Material, Model};
+use crate::model::{ClothDesc, ClothModel, MassSpec, Material, Model, Shell};
 use crate::{Error, Mesh, Result, Simulation, SolverSettings, Vec3};
 use glam::DQuat;
 
@@ -31,6 +39,10 @@ pub enum Preset {
     Pile,
     /// Wrung by two handles turning opposite ways.
     Twist,
+    /// A shell strip clamped at one end (size: edge length in mm).
+    Cantilever,
+    /// A shell disc draping over the Cusick support (size: edge length in mm).
+    Cusick,
 }
 
 impl Preset {
@@ -50,9 +62,11 @@ impl Preset {
             "drape" => Preset::Drape,
             "pile" => Preset::Pile,
             "twist" => Preset::Twist,
+            "cantilever" => Preset::Cantilever,
+            "cusick" => Preset::Cusick,
             _ => {
                 return Err(bad(format!(
-                    "unknown kind '{kind}' (hang, drape, pile or twist)"
+                    "unknown kind '{kind}' (hang, drape, pile, twist, cantilever or cusick)"
                 )));
             }
         };
@@ -66,11 +80,18 @@ impl Preset {
             Preset::Drape => 30,
             Preset::Pile => 40,
             Preset::Twist => 90,
+            Preset::Cantilever => 5,
+            Preset::Cusick => 30,
         }
     }
 
-    /// The model of this scene at `n × n` vertices.
+    /// The model of this scene at `n × n` vertices (cantilever, cusick: edge length `n` mm).
     pub fn model(self, n: usize) -> Result<Model> {
+        match self {
+            Preset::Cantilever => return cantilever(n as f64 * 1e-3),
+            Preset::Cusick => return cusick(n as f64 * 1e-3),
+            _ => {}
+        }
         let material = Material {
             stretch_stiffness: 1000.0,
             shear_stiffness: 100.0,
@@ -97,7 +118,7 @@ impl Preset {
                     radius: 0.3,
                 })),
             ),
-            Preset::Pile => (
+            _ => (
                 Vec3::new(0.0, 0.6, 0.0),
                 Vec3::new(0.0, 0.3, 1.0),
                 vec![],
@@ -111,7 +132,7 @@ impl Preset {
             Preset::Hang => "hang",
             Preset::Drape => "drape",
             Preset::Pile => "pile",
-            Preset::Twist => "twist",
+            _ => "twist",
         };
         let mesh = Mesh::grid([1.0, 1.0], [n, n], center, normal)?;
         let (handles, gravity) = match self {
@@ -162,6 +183,94 @@ impl Preset {
     }
 }
 
+/// The cantilever: a 16 cm strip past a level clamp at x = 0, 4 cm wide, at edge length `h` m,
+/// its first two columns pinned.
+fn cantilever(h: f64) -> Result<Model> {
+    let (length, width) = (0.16, 0.04);
+    let nx = (length / h).round() as usize + 2;
+    let nz = (width / h).round() as usize + 1;
+    let total = (nx - 1) as f64 * h;
+    let mesh = Mesh::grid(
+        [total, width],
+        [nx, nz],
+        Vec3::new(total / 2.0 - h, 0.0, 0.0),
+        Vec3::Y,
+    )?;
+    let pins = (0..nz as u32)
+        .flat_map(|r| [r * nx as u32, r * nx as u32 + 1])
+        .collect();
+    let material = Material {
+        model: ClothModel::Shell,
+        shell: Shell {
+            stretch_modulus: [5000.0, 5000.0],
+            poisson: 0.0,
+            shear_modulus: None,
+            bending_rigidity: [1e-4, 1e-4],
+            damping: 0.05,
+        },
+        damping: 0.0,
+        air_drag: 2.0 * 0.1 * h * h,
+        mass: MassSpec::Density(0.1),
+        ..Default::default()
+    };
+    let cloth = ClothDesc {
+        name: "cantilever".into(),
+        mesh,
+        material,
+        pins,
+        initial_velocity: Vec3::ZERO,
+        handles: Vec::new(),
+    };
+    Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0))
+}
+
+/// The Cusick drape test: a 30 cm `cotton` disc at edge length `h` m, 3 mm above the top
+/// (y = 0) of a closed support cylinder of 18 cm diameter.
+fn cusick(h: f64) -> Result<Model> {
+    let f = crate::textile::fabrics::fabric("cotton")
+        .ok_or_else(|| Error::Invalid("no cotton preset".into()))?;
+    let mesh = crate::textile::drape::disc(0.15, h)?.placed(Vec3::new(0.0, 0.003, 0.0), Vec3::Y);
+    let support = crate::textile::drape::support(0.09, 0.01, 128)?.placed(Vec3::ZERO, Vec3::Y);
+    let material = Material {
+        model: ClothModel::Shell,
+        shell: Shell {
+            stretch_modulus: f.stretch_modulus,
+            poisson: f.poisson,
+            shear_modulus: Some(f.shear_modulus),
+            bending_rigidity: f.bending_rigidity,
+            damping: f.damping,
+        },
+        damping: 0.0,
+        air_drag: 2.0 * f.density * h * h,
+        mass: MassSpec::Density(f.density),
+        ..Default::default()
+    };
+    let cloth = ClothDesc {
+        name: "cusick".into(),
+        mesh,
+        material,
+        pins: Vec::new(),
+        initial_velocity: Vec3::ZERO,
+        handles: Vec::new(),
+    };
+    let mut model = Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0))?;
+    model.collision = Some(CollisionSettings {
+        thickness: 0.002,
+        self_collision: false,
+        friction: 0.3,
+        stiffness: 1000.0,
+    });
+    model.obstacles = vec![Obstacle {
+        name: None,
+        collider: Collider::fixed(Shape::Mesh(TriangleMesh::new(
+            support.positions.clone(),
+            support.triangles(),
+        ))),
+        friction: 0.3,
+    }];
+    Ok(model)
+}
+
 /// The twist's handles: the vertices at x = -0.5 and x = +0.5, each turning one turn about +x
 /// (the left one counter-clockwise, the right one clockwise) in 4 s, keyed every eighth of a
 /// turn, while moving 0.1 m toward the middle.
@@ -201,6 +310,11 @@ mod tests {
         assert_eq!(Preset::parse("hang-64").unwrap(), (Preset::Hang, 64));
         assert_eq!(Preset::parse("pile-2").unwrap(), (Preset::Pile, 2));
         assert_eq!(Preset::parse("twist-128").unwrap(), (Preset::Twist, 128));
+        assert_eq!(Preset::parse("cusick-10").unwrap(), (Preset::Cusick, 10));
+        assert_eq!(
+            Preset::parse("cantilever-5").unwrap(),
+            (Preset::Cantilever, 5)
+        );
         for bad in ["hang", "hang-1", "hang-x", "swing-64", "drape-5000"] {
             assert!(Preset::parse(bad).is_err(), "{bad}");
         }
@@ -293,5 +407,23 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn textile_scenes_have_their_mass_pins_and_support() {
+        // cantilever at 1 cm: 16 + 2 columns, 5 rows, two columns pinned; 0.1 kg/m² over
+        // 17 cm × 4 cm
+        let m = Preset::Cantilever.model(10).unwrap();
+        assert_eq!(m.pinned.len(), 18 * 5);
+        assert_eq!(m.pinned.iter().filter(|&&p| p).count(), 10);
+        assert!((m.total_mass() - 0.1 * 0.17 * 0.04).abs() < 1e-12);
+        // cusick at 1 cm: 15 rings; mass ρ × the inscribed 90-gon's area; one support
+        let m = Preset::Cusick.model(10).unwrap();
+        let f = crate::textile::fabrics::fabric("cotton").unwrap();
+        let n = 90.0;
+        let area = 0.5 * n * 0.15 * 0.15 * (std::f64::consts::TAU / n).sin();
+        assert!((m.total_mass() - f.density * area).abs() < 1e-12);
+        assert_eq!(m.obstacles.len(), 1);
+        assert!(m.collision.is_some_and(|c| !c.self_collision));
     }
 }

@@ -179,6 +179,7 @@ struct ClothTable {
     name: String,
     mesh: Option<String>,
     grid: Option<GridTable>,
+    disc: Option<DiscTable>,
     #[serde(default)]
     pin: Vec<u32>,
     initial_velocity: Option<[f64; 3]>,
@@ -189,13 +190,32 @@ struct ClothTable {
 }
 
 /// The keys of `[[cloth]]` besides the material's.
-const CLOTH_KEYS: &[&str] = &["name", "mesh", "grid", "pin", "initial_velocity", "handle"];
+const CLOTH_KEYS: &[&str] = &[
+    "name",
+    "mesh",
+    "grid",
+    "disc",
+    "pin",
+    "initial_velocity",
+    "handle",
+];
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct GridTable {
     size: [f64; 2],
     resolution: [i64; 2],
+    center: Option<[f64; 3]>,
+    normal: Option<[f64; 3]>,
+}
+
+/// `disc = { radius, edge_length, center, normal }`: a flat disc triangulated in rings
+/// ([`crate::textile::drape::disc`]), e.g. a Cusick drape specimen.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DiscTable {
+    radius: f64,
+    edge_length: f64,
     center: Option<[f64; 3]>,
     normal: Option<[f64; 3]>,
 }
@@ -342,8 +362,8 @@ impl Scene {
         let mut attachments = Vec::new();
         for (i, c) in file.cloth.iter().enumerate() {
             let what = format!("cloth[{i}] '{}': ", c.name);
-            let mesh = match (&c.mesh, &c.grid) {
-                (Some(m), None) => {
+            let mesh = match (&c.mesh, &c.grid, &c.disc) {
+                (Some(m), None, None) => {
                     let mesh_path = dir.join(m);
                     crate::io::obj::read_obj(&mesh_path).map_err(|e| match e {
                         Error::Io { path: p, cause } => Error::input(
@@ -353,15 +373,16 @@ impl Scene {
                         other => other,
                     })?
                 }
-                (None, Some(g)) => grid_mesh(g, &what).map_err(file_err)?,
-                (Some(_), Some(_)) => {
+                (None, Some(g), None) => grid_mesh(g, &what).map_err(file_err)?,
+                (None, None, Some(d)) => disc_mesh(d, &what).map_err(file_err)?,
+                (None, None, None) => {
                     return Err(file_err(format!(
-                        "{what}give either mesh or grid, not both"
+                        "{what}missing field `mesh` (an OBJ file), `grid` or `disc`"
                     )));
                 }
-                (None, None) => {
+                _ => {
                     return Err(file_err(format!(
-                        "{what}missing field `mesh` (an OBJ file) or `grid`"
+                        "{what}give one of mesh, grid and disc, not several"
                     )));
                 }
             };
@@ -611,6 +632,21 @@ fn grid_mesh(g: &GridTable, what: &str) -> std::result::Result<Mesh, String> {
     Mesh::grid(g.size, res, center, normal).map_err(|e| format!("{what}grid: {e}"))
 }
 
+/// The cloth of a `disc` key: [`crate::textile::drape::disc`] laid in the plane through
+/// `center` normal to `normal`, its texture coordinates (warp `u`, weft `v`) the disc's own
+/// 2-D coordinates in m.
+fn disc_mesh(d: &DiscTable, what: &str) -> std::result::Result<Mesh, String> {
+    let radius = positive(what, "disc.radius", d.radius)?;
+    let edge = positive(what, "disc.edge_length", d.edge_length)?;
+    let center = finite3(what, "disc.center", d.center.unwrap_or(DEFAULT_GRID_CENTER))?;
+    let normal = finite3(what, "disc.normal", d.normal.unwrap_or(DEFAULT_GRID_NORMAL))?;
+    if normal.length() == 0.0 {
+        return Err(format!("{what}disc.normal must be a non-zero vector"));
+    }
+    let flat = crate::textile::drape::disc(radius, edge).map_err(|e| format!("{what}{e}"))?;
+    Ok(flat.placed(center, normal))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -630,6 +666,39 @@ pin = [0, 2]
 
     fn load(text: &str) -> Result<Scene> {
         Scene::from_str(text, Path::new("dir/s.toml"))
+    }
+
+    #[test]
+    fn a_disc_cloth_lies_in_its_plane_and_bad_discs_are_errors() {
+        let disc = BASE.replace(
+            "grid = { size = [1, 2], resolution = [3, 4] }",
+            "disc = { radius = 0.15, edge_length = 0.05, center = [0, 1, 0], normal = [0, 1, 0] }",
+        );
+        let s = load(&disc).unwrap();
+        let m = &s.cloths[0].mesh;
+        // 3 rings of 6k vertices and a centre, all at y = 1 within 0.15 of the centre
+        assert_eq!(m.positions.len(), 1 + 6 + 12 + 18);
+        for p in &m.positions {
+            assert!((p.y - 1.0).abs() < 1e-15 && p.x.hypot(p.z) < 0.15 + 1e-12, "{p}");
+        }
+        // faces turned to face +y, and texture coordinates for warp and weft
+        let t = m.triangles()[0].map(|i| m.positions[i as usize]);
+        assert!((t[1] - t[0]).cross(t[2] - t[0]).y > 0.0);
+        assert_eq!(m.face_uv.len(), m.faces.len());
+        for (bad, message) in [
+            ("radius = 0.15", "disc.radius must be a finite number > 0, got -1"),
+            ("edge_length = 0.05", "disc.edge_length must be a finite number > 0, got -1"),
+            ("normal = [0, 1, 0]", "disc.normal must be a non-zero vector"),
+        ] {
+            let key = bad.split(" =").next().unwrap();
+            let value = if key == "normal" { "[0, 0, 0]" } else { "-1" };
+            let text = disc.replace(bad, &format!("{key} = {value}"));
+            let e = load(&text).unwrap_err().to_string();
+            assert!(e.contains(message) && e.contains("cloth[0] 'sheet'"), "{e}");
+        }
+        let both = disc.replace("name = \"sheet\"", "name = \"sheet\"\ngrid = { size = [1, 1], resolution = [2, 2] }");
+        let e = load(&both).unwrap_err().to_string();
+        assert!(e.contains("give one of mesh, grid and disc"), "{e}");
     }
 
     #[test]

@@ -315,6 +315,50 @@ pub fn disc(radius: f64, edge_length: f64) -> Result<Mesh> {
     })
 }
 
+/// The Cusick tester's support: a closed cylinder of `radius` (m) about the z axis, its flat top
+/// at z = 0 and its bottom at z = −`height`, with `segments` vertices around each rim and a
+/// centre vertex on each cap (a sharp rim: the top is flat out to the circle). Triangles wind
+/// outward. For a mesh collider (`shape = "mesh"`).
+///
+/// Errors if `radius` or `height` is not a finite number > 0 or `segments` < 3.
+pub fn support(radius: f64, height: f64, segments: usize) -> Result<Mesh> {
+    for (name, v) in [("radius", radius), ("height", height)] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(Error::Invalid(format!(
+                "support: {name} must be a finite number > 0, got {v}"
+            )));
+        }
+    }
+    if !(3..=1 << 20).contains(&segments) {
+        return Err(Error::Invalid(format!(
+            "support: segments must be from 3 to 2²⁰, got {segments}"
+        )));
+    }
+    let m = segments as u32;
+    let tau = std::f64::consts::TAU;
+    // 0: top centre, 1: bottom centre, then the top rim (2..2+m), then the bottom rim
+    let mut positions = vec![Vec3::ZERO, Vec3::new(0.0, 0.0, -height)];
+    for z in [0.0, -height] {
+        for i in 0..segments {
+            let a = tau * i as f64 / segments as f64;
+            positions.push(Vec3::new(radius * a.cos(), radius * a.sin(), z));
+        }
+    }
+    let (top, bottom) = (|i: u32| 2 + i % m, |i: u32| 2 + m + i % m);
+    let mut faces = Vec::with_capacity(4 * segments);
+    for i in 0..m {
+        faces.push(Face::Tri([0, top(i), top(i + 1)]));
+        faces.push(Face::Tri([1, bottom(i + 1), bottom(i)]));
+        faces.push(Face::Tri([top(i), bottom(i), bottom(i + 1)]));
+        faces.push(Face::Tri([top(i), bottom(i + 1), top(i + 1)]));
+    }
+    Ok(Mesh {
+        positions,
+        faces,
+        ..Mesh::default()
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -544,5 +588,35 @@ mod tests {
         // no triangles: no shadow, and the coefficient says the cloth covers less than the
         // support
         assert_eq!(shadow(&m.positions, &[], Vec3::Z, 16).unwrap().area, 0.0);
+    }
+
+    #[test]
+    fn the_support_is_a_closed_outward_cylinder() {
+        let (r, h, n) = (0.09, 0.01, 64);
+        let m = support(r, h, n).unwrap();
+        m.validate("support").unwrap();
+        // closed: every edge in exactly two triangles, opposite ways
+        let mut count = std::collections::BTreeMap::new();
+        for t in m.triangles() {
+            for k in 0..3 {
+                *count.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
+            }
+        }
+        for (&(a, b), &c) in &count {
+            assert_eq!((c, count.get(&(b, a))), (1, Some(&1)), "{a}–{b}");
+        }
+        // outward: the divergence theorem gives the polygon prism's volume, positive
+        let volume: f64 = (m.triangles().iter())
+            .map(|t| {
+                let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum();
+        let polygon = 0.5 * n as f64 * r * r * (std::f64::consts::TAU / n as f64).sin();
+        assert!((volume - polygon * h).abs() < 1e-12 * volume, "{volume}");
+        // the top is flat at z = 0 out to the rim
+        let top: Vec<&Vec3> = m.positions.iter().filter(|p| p.z == 0.0).collect();
+        assert_eq!(top.len(), n + 1);
+        assert!(support(0.0, h, n).is_err() && support(r, h, 2).is_err());
     }
 }

@@ -5,6 +5,7 @@ mod cloth_friction;
 mod collisions;
 mod common;
 mod determinism;
+mod drape;
 mod equilibrium;
 mod implicit_step;
 mod pcg_breakdowns;

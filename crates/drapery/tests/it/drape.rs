@@ -1,0 +1,197 @@
+//! The Cusick drape test (BS 5058 / ISO 9073-9) on the shell model: a 30 cm disc of fabric
+//! settles under gravity on a support disc of 18 cm (the mesh collider
+//! `examples/cusick_support.obj`, a flat top with a sharp rim), and
+//! `drapery::textile::drape::drape_coefficient` measures its shadow:
+//!
+//! * resolution independence: the coefficient at edge lengths 1 cm and 5 mm agrees within
+//!   0.03 (at 2 cm, 3 rings across the overhang, it does not: 0.39 against 0.63, not asserted;
+//!   docs/MATERIALS.md §4.4);
+//! * presets: every coefficient lies in (0, 1) and they are ordered like the bending length
+//!   `(B/(ρ g))^{1/3}` (stiffer per weight drapes less), up to the resolution error.
+
+use drapery::math::Vec3;
+use drapery::scene::Scene;
+use drapery::textile::drape::drape_coefficient;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Specimen and support radii, m.
+const RD: f64 = 0.15;
+const RS: f64 = 0.09;
+
+/// The drape scene at edge length `h` with the material keys `material` (TOML lines).
+fn cusick_scene(h: f64, density: f64, material: &str) -> String {
+    format!(
+        r#"
+[simulation]
+duration = 3.0
+dt = 0.01
+frame_rate = 10
+
+[solver]
+tolerance = 1e-6
+max_iterations = 2000
+
+[collision]
+thickness = 0.002
+self_collision = false
+friction = 0.3
+
+[[collider]]
+shape = "mesh"
+mesh = "cusick_support.obj"
+
+[[cloth]]
+name = "specimen"
+disc = {{ radius = {RD}, edge_length = {h}, center = [0.0, 0.003, 0.0], normal = [0.0, 1.0, 0.0] }}
+{material}
+air_drag = {drag}
+"#,
+        drag = 2.0 * density * h * h,
+    )
+}
+
+/// Settles the scene and returns the drape coefficient and the largest speed left.
+fn drape(text: &str) -> (f64, f64) {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/cusick.toml");
+    let scene = Scene::from_str(text, &path).unwrap();
+    let mut sim = scene.start().unwrap();
+    let dt = scene.step_size();
+    for _ in 0..scene.step_count() {
+        sim.step(dt).unwrap();
+    }
+    let x = sim.positions();
+    let tri = scene.cloths[0].mesh.triangles();
+    let dc = drape_coefficient(x, &tri, Vec3::Y, RS, RD).unwrap();
+    let speed = sim
+        .velocities()
+        .iter()
+        .map(|v| v.length())
+        .fold(0.0, f64::max);
+    (dc, speed)
+}
+
+#[test]
+fn cusick_drape_coefficient_is_resolution_independent() {
+    let density = drapery::textile::fabrics::fabric("cotton").unwrap().density;
+    let mut dcs = Vec::new();
+    for h in [0.01, 0.005] {
+        let t = Instant::now();
+        let (dc, speed) = drape(&cusick_scene(h, density, "material = \"cotton\""));
+        eprintln!(
+            "cotton, h = {h}: DC {dc:.4}, speed {speed:.2e}, {:.1} s",
+            t.elapsed().as_secs_f64()
+        );
+        assert!(speed < 1e-2, "h = {h}: not settled, speed {speed}");
+        assert!(dc > 0.0 && dc < 1.0, "h = {h}: DC {dc}");
+        dcs.push(dc);
+    }
+    assert!((dcs[0] - dcs[1]).abs() < 0.03, "{dcs:?}");
+}
+
+const G: f64 = 9.80665;
+
+/// Checks that coefficients `(name, bending length, DC)` fall in (0, 1) and are ordered like the
+/// bending length, allowing `tie` between any pair.
+fn assert_ordered(runs: &[(String, f64, f64)], tie: f64) {
+    for (name, _, dc) in runs {
+        assert!(*dc > 0.0 && *dc < 1.0, "{name}: DC {dc}");
+    }
+    for a in runs {
+        for b in runs {
+            if a.1 > b.1 {
+                assert!(
+                    a.2 > b.2 - tie,
+                    "{} (c {:.4}, DC {:.3}) drapes more than {} (c {:.4}, DC {:.3})",
+                    a.0,
+                    a.1,
+                    a.2,
+                    b.0,
+                    b.1,
+                    b.2
+                );
+            }
+        }
+    }
+}
+
+/// Edge length of the preset runs, m (the finer of the resolution test's two).
+const H: f64 = 0.01;
+
+#[test]
+fn cusick_drape_of_the_presets_is_ordered_by_bending_length() {
+    let mut runs = Vec::new();
+    // white-dots-on-blk (`polyester`) is left out: at 1 cm it has not settled after 3 s (speed
+    // 0.16 m/s, DC 0.18 and falling: light, 4 kN/m stretch but 19 N/m shear) — see
+    // docs/MATERIALS.md §5
+    for name in
+        (drapery::textile::fabrics::FABRICS.iter().skip(3)).filter(|n| **n != "white-dots-on-blk")
+    {
+        let f = drapery::textile::fabrics::fabric(name).unwrap();
+        // bending length of the geometric-mean rigidity
+        let b = (f.bending_rigidity[0] * f.bending_rigidity[1]).sqrt();
+        let c = (b / (f.density * G)).cbrt();
+        let t = Instant::now();
+        let (dc, speed) = drape(&cusick_scene(
+            H,
+            f.density,
+            &format!("material = \"{name}\""),
+        ));
+        eprintln!(
+            "{name}: c = {:.2} cm, DC {dc:.4}, speed {speed:.2e}, {:.1} s",
+            100.0 * c,
+            t.elapsed().as_secs_f64()
+        );
+        assert!(speed < 1e-2, "{name}: not settled, speed {speed}");
+        runs.push((name.to_string(), c, dc));
+    }
+    assert_ordered(&runs, 0.03);
+}
+
+#[test]
+fn cusick_drape_of_matsudaira_s_fabrics_is_ordered_like_the_measurement() {
+    // docs/MATERIALS.md §2.7: (name, B N·m, ρ kg/m², measured DC); stretch and shear moduli
+    // of the polyester woven preset (white-dots-on-blk), which the source lacks
+    let p = drapery::textile::fabrics::fabric("polyester").unwrap();
+    let fabrics = [
+        ("cotton broad", 1.157e-5, 0.1238, 0.829),
+        ("wool tropical", 6.57e-6, 0.1629, 0.498),
+        ("polyester tropical", 7.55e-6, 0.1165, 0.507),
+        ("polyester faille", 1.86e-6, 0.1043, 0.283),
+    ];
+    let mut runs = Vec::new();
+    for (name, b, rho, measured) in fabrics {
+        let keys = format!(
+            "model = \"shell\"\ndensity = {rho}\nstretch_modulus = [{}, {}]\npoisson = {}\nshear_modulus = {}\nbending_rigidity = {b}\ndamping = {}",
+            p.stretch_modulus[0], p.stretch_modulus[1], p.poisson, p.shear_modulus, p.damping
+        );
+        let (dc, speed) = drape(&cusick_scene(H, rho, &keys));
+        let c = (b / (rho * G)).cbrt();
+        eprintln!(
+            "{name}: c = {:.2} cm, DC {dc:.4} (measured {measured}), speed {speed:.2e}",
+            100.0 * c
+        );
+        runs.push((name.to_string(), c, dc));
+    }
+    assert_ordered(&runs, 0.03);
+}
+
+#[test]
+fn the_cusick_example_is_the_tested_scene_at_one_centimetre() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/cusick.toml");
+    let example = Scene::load(&path).unwrap();
+    let density = drapery::textile::fabrics::fabric("cotton").unwrap().density;
+    let tested =
+        Scene::from_str(&cusick_scene(0.01, density, "material = \"cotton\""), &path).unwrap();
+    let (a, b) = (&example.cloths[0], &tested.cloths[0]);
+    assert_eq!(a.mesh.positions, b.mesh.positions);
+    // the file writes the drag 2 ρ h² rounded to its digits
+    let drag = b.material.air_drag;
+    assert!((a.material.air_drag - drag).abs() < 1e-12 * drag);
+    let mut same = a.material;
+    same.air_drag = drag;
+    assert_eq!(same, b.material);
+    assert_eq!(example.obstacles.len(), 1);
+    assert_eq!(example.collision, tested.collision);
+    assert_eq!(example.step_count(), tested.step_count());
+}
