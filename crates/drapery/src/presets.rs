@@ -232,18 +232,9 @@ fn cusick(h: f64) -> Result<Model> {
     let mesh = crate::textile::drape::disc(0.15, h)?.placed(Vec3::new(0.0, 0.003, 0.0), Vec3::Y);
     let support = crate::textile::drape::support(0.09, 0.01, 128)?.placed(Vec3::ZERO, Vec3::Y);
     let material = Material {
-        model: ClothModel::Shell,
-        shell: Shell {
-            stretch_modulus: f.stretch_modulus,
-            poisson: f.poisson,
-            shear_modulus: Some(f.shear_modulus),
-            bending_rigidity: f.bending_rigidity,
-            damping: f.damping,
-        },
         damping: 0.0,
         air_drag: 2.0 * f.density * h * h,
-        mass: MassSpec::Density(f.density),
-        ..Default::default()
+        ..f.material()
     };
     let cloth = ClothDesc {
         name: "cusick".into(),

@@ -19,7 +19,7 @@
 
 use crate::collision::colliders::Keys;
 use crate::error::Result;
-use crate::model::{ClothModel, MassSpec, Material, Shell};
+use crate::model::{ClothModel, MassSpec, Material};
 
 /// The keys read here.
 pub(super) const KEYS: &[&str] = &[
@@ -147,18 +147,7 @@ fn preset(k: &Keys) -> Result<Material> {
             ),
         ));
     };
-    Ok(Material {
-        mass: MassSpec::Density(f.density),
-        model: ClothModel::Shell,
-        shell: Shell {
-            stretch_modulus: f.stretch_modulus,
-            poisson: f.poisson,
-            shear_modulus: Some(f.shear_modulus),
-            bending_rigidity: f.bending_rigidity,
-            damping: f.damping,
-        },
-        ..Material::default()
-    })
+    Ok(f.material())
 }
 
 #[cfg(test)]

@@ -48,6 +48,25 @@ pub struct Fabric {
     pub source: &'static str,
 }
 
+impl Fabric {
+    /// The fabric as a shell material: its moduli, rigidity, damping and density.
+    pub fn material(&self) -> crate::model::Material {
+        use crate::model::{ClothModel, MassSpec, Material, Shell};
+        Material {
+            mass: MassSpec::Density(self.density),
+            model: ClothModel::Shell,
+            shell: Shell {
+                stretch_modulus: self.stretch_modulus,
+                poisson: self.poisson,
+                shear_modulus: Some(self.shear_modulus),
+                bending_rigidity: self.bending_rigidity,
+                damping: self.damping,
+            },
+            ..Material::default()
+        }
+    }
+}
+
 /// Stiffness-proportional damping of every preset, s. A modelling choice, not a measurement:
 /// a mode of angular frequency ω gets the damping ratio `ω · DAMPING / 2`, so modes slower
 /// than about 300 Hz (ω < 2/DAMPING) are underdamped and faster (mesh-scale) ones overdamped.
