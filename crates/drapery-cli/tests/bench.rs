@@ -142,7 +142,14 @@ fn every_preset_runs_one_frame_after_its_warm_up() {
     let names: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
     assert_eq!(
         names,
-        ["hang-8", "drape-8", "pile-8", "twist-8", "cantilever-20", "cusick-20"]
+        [
+            "hang-8",
+            "drape-8",
+            "pile-8",
+            "twist-8",
+            "cantilever-20",
+            "cusick-20"
+        ]
     );
     rows.iter().for_each(check_row);
 }

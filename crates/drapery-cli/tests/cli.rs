@@ -379,7 +379,12 @@ fn missing_field_is_named() {
     let (c, s) = case(|t| t.replace("vertex_mass = 0.01\n", ""), QUAD.as_bytes());
     c.assert_rejected(
         &s,
-        &["scene.toml", "line 7, cloth[0].density", "vertex_mass", "density"],
+        &[
+            "scene.toml",
+            "line 7, cloth[0].density",
+            "vertex_mass",
+            "density",
+        ],
     );
 }
 

@@ -106,12 +106,19 @@ fn a_strain_limit_not_reached_is_reported() {
     let t = tempfile::tempdir().unwrap();
     for (modulus, warned) in [("20.0", false), ("5.0", true)] {
         let scene = t.path().join(format!("soft_{modulus}.toml"));
-        let soft = text.replace("stretch_modulus = 20.0", &format!("stretch_modulus = {modulus}"));
+        let soft = text.replace(
+            "stretch_modulus = 20.0",
+            &format!("stretch_modulus = {modulus}"),
+        );
         std::fs::write(&scene, soft).unwrap();
         let out = t.path().join(format!("out_{modulus}"));
         let r = common::drapery(&common::run_args(&scene, &out, &[]));
         assert_eq!(r.code, Some(0), "{}", r.stderr);
-        let warning = r.stderr.lines().filter(|l| l.contains("strain limit was not reached")).count();
+        let warning = r
+            .stderr
+            .lines()
+            .filter(|l| l.contains("strain limit was not reached"))
+            .count();
         assert_eq!(warning, usize::from(warned), "{modulus}: {}", r.stderr);
     }
 }

@@ -8,8 +8,8 @@
 //! given before the `p`). Prints each run's counts per step (`step:self/ccd/held`) and, per
 //! step, the largest distance of any run's positions to the first run's.
 
-use drapery::presets::Preset;
 use drapery::Vec3;
+use drapery::presets::Preset;
 
 fn main() -> drapery::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -79,4 +79,3 @@ fn direction(i: u64) -> Vec3 {
     };
     Vec3::new(next(), next(), next()).normalize()
 }
-

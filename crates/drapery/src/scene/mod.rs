@@ -679,16 +679,28 @@ pin = [0, 2]
         // 3 rings of 6k vertices and a centre, all at y = 1 within 0.15 of the centre
         assert_eq!(m.positions.len(), 1 + 6 + 12 + 18);
         for p in &m.positions {
-            assert!((p.y - 1.0).abs() < 1e-15 && p.x.hypot(p.z) < 0.15 + 1e-12, "{p}");
+            assert!(
+                (p.y - 1.0).abs() < 1e-15 && p.x.hypot(p.z) < 0.15 + 1e-12,
+                "{p}"
+            );
         }
         // faces turned to face +y, and texture coordinates for warp and weft
         let t = m.triangles()[0].map(|i| m.positions[i as usize]);
         assert!((t[1] - t[0]).cross(t[2] - t[0]).y > 0.0);
         assert_eq!(m.face_uv.len(), m.faces.len());
         for (bad, message) in [
-            ("radius = 0.15", "disc.radius must be a finite number > 0, got -1"),
-            ("edge_length = 0.05", "disc.edge_length must be a finite number > 0, got -1"),
-            ("normal = [0, 1, 0]", "disc.normal must be a non-zero vector"),
+            (
+                "radius = 0.15",
+                "disc.radius must be a finite number > 0, got -1",
+            ),
+            (
+                "edge_length = 0.05",
+                "disc.edge_length must be a finite number > 0, got -1",
+            ),
+            (
+                "normal = [0, 1, 0]",
+                "disc.normal must be a non-zero vector",
+            ),
         ] {
             let key = bad.split(" =").next().unwrap();
             let value = if key == "normal" { "[0, 0, 0]" } else { "-1" };
@@ -696,7 +708,10 @@ pin = [0, 2]
             let e = load(&text).unwrap_err().to_string();
             assert!(e.contains(message) && e.contains("cloth[0] 'sheet'"), "{e}");
         }
-        let both = disc.replace("name = \"sheet\"", "name = \"sheet\"\ngrid = { size = [1, 1], resolution = [2, 2] }");
+        let both = disc.replace(
+            "name = \"sheet\"",
+            "name = \"sheet\"\ngrid = { size = [1, 1], resolution = [2, 2] }",
+        );
         let e = load(&both).unwrap_err().to_string();
         assert!(e.contains("give one of mesh, grid and disc"), "{e}");
     }
