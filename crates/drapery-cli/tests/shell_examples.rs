@@ -122,3 +122,20 @@ fn a_strain_limit_not_reached_is_reported() {
         assert_eq!(warning, usize::from(warned), "{modulus}: {}", r.stderr);
     }
 }
+
+/// The shipped cantilever: its last frame's free tip (the mean of the last column) drops as
+/// far as the heavy elastica says, within 3 % (the library's own test runs three resolutions).
+#[test]
+fn the_cantilever_example_sags_as_the_heavy_elastica() {
+    let (_t, scene, frames) = run_and_check("cantilever");
+    let rest = &scene.cloths[0].mesh.positions;
+    let last = frames.last().unwrap();
+    let xmax = rest.iter().map(|p| p.x).fold(f64::MIN, f64::max);
+    let tip: Vec<Vec3> = (0..rest.len())
+        .filter(|&i| (rest[i].x - xmax).abs() < 1e-9)
+        .map(|i| last[i])
+        .collect();
+    let drop = -mean(&tip).y;
+    let exact = drapery::textile::elastica::cantilever(xmax, 1e-4, 0.1 * 9.81).unwrap();
+    assert!((drop - exact.tip[1]).abs() < 0.03 * exact.tip[1], "drop {drop} vs {:?}", exact.tip);
+}
