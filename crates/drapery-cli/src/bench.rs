@@ -7,6 +7,10 @@
 //! Two textile scenes on the shell model, `N` their **edge length in mm**: `cantilever-N`, a
 //! 16 cm strip clamped at one end sagging (tests/it/textile.rs), and `cusick-N`, a 30 cm
 //! cotton disc draping over an 18 cm support (tests/it/drape.rs).
+//! Shipped examples by name, read from the source tree's `examples/` (so these run from a
+//! source checkout), pre-rolled untimed as `drapery run` does, then timed at their own step,
+//! steps per frame and solver settings (`--tolerance` does not apply): `skirt`, the
+//! GarmentCode skirt sewn around the hips (examples/skirt.toml).
 //! Each scene is first advanced by some untimed warm-up frames (so that collision scenes are
 //! in contact; `--warm-up` overrides the count), then `--frames` frames are timed. Each frame is written as OBJ to a temporary
 //! folder through the same writer thread as `drapery run` ([`crate::writer`]): the loop steps,
@@ -33,7 +37,7 @@ use std::time::Instant;
 #[derive(Args)]
 pub struct BenchArgs {
     /// Scenes to run, comma-separated (e.g. hang-64,drape-64); default: all standard scenes
-    /// hang-32,hang-64,hang-128,hang-256,drape-64,drape-128,pile-64,pile-128,twist-64,twist-128,cantilever-5,cusick-5.
+    /// hang-32,hang-64,hang-128,hang-256,drape-64,drape-128,pile-64,pile-128,twist-64,twist-128,cantilever-5,cusick-5,skirt.
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
     /// Timed frames per run.
@@ -68,19 +72,59 @@ const STANDARD: &[&str] = &[
     "twist-128",
     "cantilever-5",
     "cusick-5",
+    "skirt",
 ];
 
-/// Checks a scene name `KIND-SIZE`.
-fn parse(name: &str) -> Result<(Preset, usize)> {
-    Ok(Preset::parse(name)?)
+/// Benchmark scenes that are shipped examples: name and file in the source tree's `examples/`.
+const EXAMPLES: &[(&str, &str)] = &[("skirt", "skirt.toml")];
+
+/// A benchmark scene: a preset of some size, or a shipped example's scene file.
+enum Bench {
+    Preset(Preset, usize),
+    Example(PathBuf),
 }
 
-/// Builds a named scene; returns the simulation and its warm-up frame count (`warm_up`, or the
-/// scene's own).
-fn scene(name: &str, tolerance: f64, warm_up: Option<usize>) -> Result<(Simulation, usize)> {
-    let (preset, n) = parse(name)?;
-    let warm = warm_up.unwrap_or(preset.warm_up_frames());
-    Ok((preset.simulation(n, tolerance)?, warm))
+/// Checks a scene name: `KIND-SIZE` or a shipped example's name.
+fn parse(name: &str) -> Result<Bench> {
+    if let Some((_, file)) = EXAMPLES.iter().find(|(n, _)| *n == name) {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+        return Ok(Bench::Example(dir.join(file)));
+    }
+    let (preset, n) = Preset::parse(name)?;
+    Ok(Bench::Preset(preset, n))
+}
+
+/// A scene ready to time.
+struct Built {
+    sim: Simulation,
+    /// Untimed frames first.
+    warm: usize,
+    /// The step, s, and steps per frame.
+    h: f64,
+    steps: usize,
+}
+
+/// Builds a named scene with its warm-up frame count (`warm_up`, or the scene's own; an
+/// example's pre-roll is done here, untimed).
+fn scene(name: &str, tolerance: f64, warm_up: Option<usize>) -> Result<Built> {
+    Ok(match parse(name)? {
+        Bench::Preset(preset, n) => Built {
+            sim: preset.simulation(n, tolerance)?,
+            warm: warm_up.unwrap_or(preset.warm_up_frames()),
+            h: 1.0 / 60.0,
+            steps: 1,
+        },
+        Bench::Example(path) => {
+            let scene = drapery::scene::Scene::load(&path)
+                .with_context(|| format!("scene {name}: {}", path.display()))?;
+            Built {
+                sim: scene.start()?,
+                warm: warm_up.unwrap_or(0),
+                h: scene.step_size(),
+                steps: scene.steps_per_frame(),
+            }
+        }
+    })
 }
 
 /// Peak resident set size of this process, MiB (Linux), if known.
@@ -100,6 +144,9 @@ struct RunTimes {
     output_ms: f64,
     wait_ms: f64,
     cg: f64,
+    /// Vertices and steps per frame of the scene.
+    vertices: usize,
+    steps: usize,
 }
 
 /// The writer thread's work in a bench run: each frame written over the same OBJ file.
@@ -117,9 +164,13 @@ impl Sink for ObjFile {
 
 fn run_once(args: &BenchArgs, name: &str, dir: &std::path::Path) -> Result<RunTimes> {
     let (frames, tolerance) = (args.frames, args.tolerance);
-    let (mut sim, warm) = scene(name, tolerance, args.warm_up)?;
-    let h = 1.0 / 60.0;
-    for _ in 0..warm {
+    let Built {
+        mut sim,
+        warm,
+        h,
+        steps,
+    } = scene(name, tolerance, args.warm_up)?;
+    for _ in 0..warm * steps {
         sim.step(h)
             .with_context(|| format!("scene {name} (warm-up)"))?;
     }
@@ -130,12 +181,14 @@ fn run_once(args: &BenchArgs, name: &str, dir: &std::path::Path) -> Result<RunTi
     })?;
     let start = Instant::now();
     for _ in 0..frames {
-        let r = sim.step(h).with_context(|| format!("scene {name}"))?;
+        for _ in 0..steps {
+            let r = sim.step(h).with_context(|| format!("scene {name}"))?;
+            t.assembly_ms += r.assembly_seconds * 1e3;
+            t.solve_ms += r.solve_seconds * 1e3;
+            t.collision_ms += r.collision_seconds * 1e3;
+            t.cg += r.cg_iterations as f64 / steps as f64;
+        }
         writer.send(sim.positions().to_vec())?;
-        t.assembly_ms += r.assembly_seconds * 1e3;
-        t.solve_ms += r.solve_seconds * 1e3;
-        t.collision_ms += r.collision_seconds * 1e3;
-        t.cg += r.cg_iterations as f64;
     }
     let done = writer.finish()?;
     let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
@@ -151,6 +204,8 @@ fn run_once(args: &BenchArgs, name: &str, dir: &std::path::Path) -> Result<RunTi
         output_ms: t.output_ms / f,
         wait_ms: t.wait_ms / f,
         cg: t.cg / f,
+        vertices: sim.model().particle_count(),
+        steps,
     })
 }
 
@@ -184,7 +239,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         None => String::new(),
     };
     println!(
-        "drapery bench: {} timed frames x {} runs per scene{warm_up}, 1 step per frame (dt = 1/60 s), tolerance {:e}, {} threads",
+        "drapery bench: {} timed frames x {} runs per scene{warm_up}, presets 1 step per frame (dt = 1/60 s), examples their own steps and solver, tolerance {:e}, {} threads",
         args.frames,
         args.runs,
         args.tolerance,
@@ -214,14 +269,13 @@ pub fn bench(args: BenchArgs) -> Result<()> {
                 .collect::<Result<_>>()?;
             let m = |f: fn(&RunTimes) -> f64| median(runs.iter().map(f).collect());
             // the model's own vertex count (the textile scenes' size is an edge length)
-            let (preset, n) = parse(s)?;
-            let vertices = preset.model(n)?.particle_count();
+            let (vertices, steps) = (runs[0].vertices, runs[0].steps);
             println!(
                 "{:<10} {:>8} {:>10.2} {:>6} {:>8.1} {:>10.2} {:>9.2} {:>10.2} {:>8.2} {:>6.2} {:>9}",
                 s,
                 vertices,
                 m(|r| r.frame_ms),
-                1,
+                steps,
                 m(|r| r.cg),
                 m(|r| r.assembly_ms),
                 m(|r| r.solve_ms),

@@ -137,5 +137,9 @@ fn the_cantilever_example_sags_as_the_heavy_elastica() {
         .collect();
     let drop = -mean(&tip).y;
     let exact = drapery::textile::elastica::cantilever(xmax, 1e-4, 0.1 * 9.81).unwrap();
-    assert!((drop - exact.tip[1]).abs() < 0.03 * exact.tip[1], "drop {drop} vs {:?}", exact.tip);
+    assert!(
+        (drop - exact.tip[1]).abs() < 0.03 * exact.tip[1],
+        "drop {drop} vs {:?}",
+        exact.tip
+    );
 }
