@@ -43,9 +43,8 @@ pub(super) fn garment(
     let edge_length = k.positive("edge_length")?;
     let offset = k.opt_vec3("translation")?.unwrap_or(Vec3::ZERO);
     let material = super::material::material(&k)?;
-    let or = |key: &str, default: f64| -> Result<f64> { Ok(k.opt_number(key)?.unwrap_or(default)) };
-    let stiffness = or("stitch_stiffness", DEFAULT_STIFFNESS)?;
-    let damping = or("stitch_damping", DEFAULT_DAMPING)?;
+    let stiffness = k.number_or("stitch_stiffness", DEFAULT_STIFFNESS)?;
+    let damping = k.number_or("stitch_damping", DEFAULT_DAMPING)?;
     let garment = Pattern::load(k.file("pattern")?)?.triangulate(edge_length)?;
     let cloth_name = |p: usize| format!("{name}.{}", garment.panels[p].name);
     let cloths = garment

@@ -104,8 +104,7 @@ pub(super) fn material(k: &Keys) -> Result<Material> {
             ));
         }
     };
-    let or =
-        |key: &str, default: f64| Ok::<f64, crate::Error>(k.opt_number(key)?.unwrap_or(default));
+    let or = |key: &str, default: f64| k.number_or(key, default);
     let d = Material::default();
     let mut m = Material {
         stretch_stiffness: or("stretch_stiffness", d.stretch_stiffness)?,

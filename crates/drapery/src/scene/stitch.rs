@@ -30,15 +30,11 @@ fn side(keys: &Keys, table: &toml::Table, name: &str, dir: &Path) -> Result<Stit
 pub(super) fn stitch(i: usize, table: &toml::Table, dir: &Path) -> Result<StitchDesc> {
     let keys = Keys::new(table, format!("stitch[{i}]"), dir);
     keys.only(KEYS, "[[stitch]]")?;
-    let optional = |key: &str, default: f64| match keys.has(key) {
-        true => keys.number(key),
-        false => Ok(default),
-    };
     Ok(StitchDesc {
         a: side(&keys, table, "a", dir)?,
         b: side(&keys, table, "b", dir)?,
-        stiffness: optional("stiffness", DEFAULT_STIFFNESS)?,
-        damping: optional("damping", DEFAULT_DAMPING)?,
+        stiffness: keys.number_or("stiffness", DEFAULT_STIFFNESS)?,
+        damping: keys.number_or("damping", DEFAULT_DAMPING)?,
     })
 }
 

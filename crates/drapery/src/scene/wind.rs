@@ -47,14 +47,10 @@ pub(super) fn wind(i: usize, table: &toml::Table, dir: &Path) -> Result<Wind> {
             ));
         }
     };
-    let optional = |key: &str, default: f64| match keys.has(key) {
-        true => keys.number(key),
-        false => Ok(default),
-    };
     Ok(Wind {
         velocity,
-        density: optional("density", DEFAULT_DENSITY)?,
-        drag: optional("drag", DEFAULT_DRAG)?,
+        density: keys.number_or("density", DEFAULT_DENSITY)?,
+        drag: keys.number_or("drag", DEFAULT_DRAG)?,
     })
 }
 

@@ -82,6 +82,11 @@ impl<'a> Keys<'a> {
         self.has(key).then(|| self.number(key)).transpose()
     }
 
+    /// An optional number, `default` when the key is absent.
+    pub fn number_or(&self, key: &str, default: f64) -> Result<f64> {
+        Ok(self.opt_number(key)?.unwrap_or(default))
+    }
+
     /// An optional pair given as `[a, b]` or as one number for both.
     pub fn opt_pair(&self, key: &str) -> Result<Option<[f64; 2]>> {
         let Some(v) = self.table.get(key) else {
