@@ -143,3 +143,20 @@ fn the_cantilever_example_sags_as_the_heavy_elastica() {
         exact.tip
     );
 }
+
+/// The shipped Cusick test: no frame intersects the support, and the settled disc hangs over
+/// the support's rim (a drape coefficient strictly between flat, 1, and hanging straight, 0).
+#[test]
+fn the_cusick_example_drapes_over_its_support_without_intersecting() {
+    let (_t, scene, frames) = run_and_check("cusick");
+    let tris = scene.cloths[0].mesh.triangles();
+    let dc = drapery::textile::drape::drape_coefficient(
+        frames.last().unwrap(),
+        &tris,
+        Vec3::Y,
+        0.09,
+        0.15,
+    )
+    .unwrap();
+    assert!(dc > 0.0 && dc < 1.0, "drape coefficient {dc}");
+}
