@@ -747,7 +747,8 @@ mod tests {
         ) {
             h.damping = alpha;
             let got = assembled(&h, &x, &v, 0.0, 1.0);
-            let fd = fd_jacobian(&h, &x, &v, true);
+            // linear in v: a step of 1 m/s (see `fd_jacobian_step`)
+            let fd = fd_jacobian_step(&h, &x, &v, true, 1.0);
             prop_assert!(rel_diff(&got, &fd) < 1e-7, "{}", rel_diff(&got, &fd));
             let mut f = vec![Vec3::ZERO; 5];
             h.add_force(&at(&x, &v), &mut f);

@@ -674,21 +674,7 @@ mod tests {
             // the force is linear in v, so a central difference of step 1 m/s is exact up to
             // rounding; a small step would divide the rounding of the (much larger) elastic
             // force by the step
-            let n = x.len();
-            let mut fd = vec![vec![0.0; 3 * n]; 3 * n];
-            for j in 0..n {
-                for d in 0..3 {
-                    let (mut vp, mut vm) = (v.clone(), v.clone());
-                    vp[j][d] += 1.0;
-                    vm[j][d] -= 1.0;
-                    let (fp, fm) = (forces(&m, &x, &vp), forces(&m, &x, &vm));
-                    for i in 0..n {
-                        for r in 0..3 {
-                            fd[3 * i + r][3 * j + d] = 0.5 * (fp[i][r] - fm[i][r]);
-                        }
-                    }
-                }
-            }
+            let fd = fd_jacobian_step(&m, &x, &v, true, 1.0);
             prop_assert!(rel_diff(&got, &fd) < 1e-6, "{}", rel_diff(&got, &fd));
             // -∂Ψ/∂v is the damping part of the force
             let zero = vec![Vec3::ZERO; 4];

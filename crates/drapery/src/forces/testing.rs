@@ -31,13 +31,26 @@ pub fn fd_gradient(force: &dyn Force, x: &[Vec3]) -> Vec<Vec3> {
 
 /// Dense `∂f/∂x` (wrt = false) or `∂f/∂v` (wrt = true) by central differences.
 pub fn fd_jacobian(force: &dyn Force, x: &[Vec3], v: &[Vec3], wrt_v: bool) -> Vec<Vec<f64>> {
+    fd_jacobian_step(force, x, v, wrt_v, 1e-6)
+}
+
+/// [`fd_jacobian`] with the relative step `step`. A force linear in `v` takes a step of 1 in `v`:
+/// its central difference is then exact up to rounding, which a small step would divide by the
+/// step (the rounding of a large elastic part of the same force).
+pub fn fd_jacobian_step(
+    force: &dyn Force,
+    x: &[Vec3],
+    v: &[Vec3],
+    wrt_v: bool,
+    step: f64,
+) -> Vec<Vec<f64>> {
     let n = x.len();
     let mut jac = vec![vec![0.0; 3 * n]; 3 * n];
     let (mut xp, mut vp) = (x.to_vec(), v.to_vec());
     for j in 0..n {
         for d in 0..3 {
             let base = if wrt_v { v[j][d] } else { x[j][d] };
-            let e = 1e-6 * (1.0 + base.abs());
+            let e = step * (1.0 + base.abs());
             let mut eval = |delta: f64| {
                 if wrt_v {
                     vp[j][d] = base + delta;
