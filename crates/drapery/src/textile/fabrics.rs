@@ -20,8 +20,10 @@
 //! The database does not say which material axis is the warp; the presets take u as warp.
 //! None of Wang et al.'s fabrics is silk, wool or leather, and no source read for this module
 //! gives a complete set for those: [`fabric`] returns `None` for them and [`UNAVAILABLE`] says
-//! why. The database has no drape coefficients, so `drape_coefficient` is `None` throughout.
-//! Damping is a modelling choice, not a measurement ([`DAMPING`]).
+//! why. The database has no drape coefficients and no other source read reports one for these
+//! samples or their fabric types, so [`Fabric::drape_range`] is `None` throughout; the drape
+//! coefficients that were read (for other fabrics) are in [`DRAPE_MEASUREMENTS`], with their
+//! sources. Damping is a modelling choice, not a measurement ([`DAMPING`]).
 
 /// A fabric's mechanical constants in SI units, for the shell model (`model::Shell`).
 #[derive(Clone, Debug, PartialEq)]
@@ -41,9 +43,11 @@ pub struct Fabric {
     pub bending_rigidity: [f64; 2],
     /// Stiffness-proportional damping, s: a modelling choice ([`DAMPING`]), not a measurement.
     pub damping: f64,
-    /// The range of Cusick drape coefficients the source reports for this kind of fabric, or
-    /// `None` where the source reports none (as for every preset here).
-    pub drape_coefficient: Option<[f64; 2]>,
+    /// The range `[low, high]` of Cusick drape coefficients (30 cm specimen on an 18 cm
+    /// support, as a fraction) that the preset's source, or a published study of the same
+    /// fabric type, reports; `None` where no source read reports one (every preset here:
+    /// docs/MATERIALS.md §2.5).
+    pub drape_range: Option<[f64; 2]>,
     /// Where the numbers come from: the database entry, its garment and fibre content.
     pub source: &'static str,
 }
@@ -89,23 +93,25 @@ pub const FABRICS: &[&str] = &[
     "white-swim-solid",
 ];
 
-/// Fabrics asked for that have no preset, and why.
+/// Fabrics asked for that have no preset, and why (the searches: docs/MATERIALS.md §2.6).
 pub const UNAVAILABLE: &[(&str, &str)] = &[
     (
         "silk",
         "no silk in Wang et al. (2011); no source read gives its stretch, shear and bending \
-         constants",
+         constants (Matsudaira's KES-FB study of silk filament weaves was read as an abstract \
+         only)",
     ),
     (
         "wool",
         "no wool in Wang et al. (2011); Matsudaira et al. (2015), read second-hand, give one \
          wool's bending rigidity, mass and drape coefficient but no tensile or shear data \
-         (docs/MATERIALS.md §2.7)",
+         (DRAPE_MEASUREMENTS); Penava et al. (2014)'s wool moduli were seen only second-hand, \
+         in a simulator's source, for another fabric",
     ),
     (
         "leather",
         "Memon et al. (2021) give sheep garment leather's drape coefficient (47.35-69.9 %) and \
-         thickness (0.64-0.96 mm) but no mass per area or tensile data (docs/MATERIALS.md)",
+         thickness (0.64-0.96 mm) but no mass per area or tensile data (DRAPE_MEASUREMENTS)",
     ),
     (
         "navy-sparkle-sweat",
@@ -204,6 +210,86 @@ const GENERIC: &[(&str, &str)] = &[
 /// 1 gf·cm²/cm (KES-F bending rigidity B) in N·m: 1 gf = 9.80665e-3 N, 1 cm²/cm = 1e-2 m.
 pub const GF_CM2_PER_CM: f64 = 9.80665e-5;
 
+/// 1 mg/cm² (KES-F mass per area W) in kg/m²: 1e-6 kg / 1e-4 m².
+pub const MG_PER_CM2: f64 = 1e-2;
+
+/// A published Cusick drape measurement of a fabric that is not a preset (its source lacks the
+/// tensile and shear constants), kept to compare simulated drape coefficients with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DrapeMeasurement {
+    /// The fabric as the source names it.
+    pub name: &'static str,
+    /// KES-F bending rigidity B as the source gives it, gf·cm²/cm, if it gives one.
+    pub kes_bending: Option<f64>,
+    /// KES-F mass per area W as the source gives it, mg/cm², if it gives one.
+    pub kes_weight: Option<f64>,
+    /// The drape coefficient range `[low, high]` the source reports, as a fraction (a single
+    /// mean value is `[v, v]`).
+    pub drape_range: [f64; 2],
+    /// Authors, year, title, table; and whether the numbers were read first- or second-hand.
+    pub source: &'static str,
+}
+
+impl DrapeMeasurement {
+    /// The bending rigidity in N·m (B × [`GF_CM2_PER_CM`]).
+    pub fn bending_rigidity(&self) -> Option<f64> {
+        self.kes_bending.map(|b| b * GF_CM2_PER_CM)
+    }
+
+    /// The mass per area in kg/m² (W × [`MG_PER_CM2`]).
+    pub fn density(&self) -> Option<f64> {
+        self.kes_weight.map(|w| w * MG_PER_CM2)
+    }
+}
+
+const MATSUDAIRA_2015: &str = "M. Matsudaira, T. Masuda, M. Wada, H. Yokura (2015), Shape \
+    factor of flared skirts compared with that of circular fabrics, J. Textile Engineering \
+    61(6) 69-73, doi:10.4188/jte.61.69, Tables 1 and 2; read second-hand (as transcribed, with \
+    this citation, in a public repository's source file)";
+
+/// The Cusick drape coefficients read for this work, with their sources (docs/MATERIALS.md
+/// §2.6–2.7). None is of a preset's fabric.
+pub const DRAPE_MEASUREMENTS: &[DrapeMeasurement] = &[
+    DrapeMeasurement {
+        name: "sheep garment leather (four samples)",
+        // flexural rigidity "9.2 to 22" in the abstract, unit not stated there: not used
+        kes_bending: None,
+        kes_weight: None,
+        drape_range: [0.4735, 0.699],
+        source: "H. Memon, E. B. Chaklie, H. M. Yesuf, C. Zhu (2021), Study on effect of \
+                 leather rigidity and thickness on drapability of sheep garment leather, \
+                 Materials 14(16) 4553, doi:10.3390/ma14164553, abstract; read first-hand",
+    },
+    DrapeMeasurement {
+        name: "cotton broad (100% cotton, plain weave)",
+        kes_bending: Some(0.118),
+        kes_weight: Some(12.38),
+        drape_range: [0.829, 0.829],
+        source: MATSUDAIRA_2015,
+    },
+    DrapeMeasurement {
+        name: "wool tropical (100% wool, plain weave)",
+        kes_bending: Some(0.067),
+        kes_weight: Some(16.29),
+        drape_range: [0.498, 0.498],
+        source: MATSUDAIRA_2015,
+    },
+    DrapeMeasurement {
+        name: "polyester tropical",
+        kes_bending: Some(0.077),
+        kes_weight: Some(11.65),
+        drape_range: [0.507, 0.507],
+        source: MATSUDAIRA_2015,
+    },
+    DrapeMeasurement {
+        name: "polyester faille",
+        kes_bending: Some(0.019),
+        kes_weight: Some(10.43),
+        drape_range: [0.283, 0.283],
+        source: MATSUDAIRA_2015,
+    },
+];
+
 /// The Fabric from one database entry (the conversion of the module docs).
 fn convert(m: &Measured, name: &'static str) -> Fabric {
     let [s0, s1, s2, s3] = m.stretch;
@@ -217,7 +303,7 @@ fn convert(m: &Measured, name: &'static str) -> Fabric {
         // strips along u bend about hinges along v (d90), strips along v about u (d0)
         bending_rigidity: [m.bend[2], m.bend[0]],
         damping: DAMPING,
-        drape_coefficient: None,
+        drape_range: None,
         source: m.source,
     }
 }
@@ -315,7 +401,7 @@ mod tests {
                 assert!((0.005..0.05).contains(&c), "{name}: c = {c}");
             }
             assert_eq!(f.damping, DAMPING);
-            assert!(f.drape_coefficient.is_none());
+            assert!(f.drape_range.is_none());
         }
         // the excluded entry is excluded for the reason given: s0 s2 < s1²
         let [s0, s1, s2] = [12.486332, -19.875324, 3.272434];
@@ -337,5 +423,25 @@ mod tests {
         );
         // 1 gf·cm²/cm = 9.80665e-3 N × 1e-4 m² / 1e-2 m
         assert!((GF_CM2_PER_CM - 9.80665e-3 * 1e-4 / 1e-2).abs() < 1e-18);
+        // 1 mg/cm² = 1e-6 kg / 1e-4 m²
+        assert!((MG_PER_CM2 - 1e-6 / 1e-4).abs() < 1e-15);
+    }
+
+    #[test]
+    fn drape_measurements_are_coefficients_with_their_sources() {
+        for m in DRAPE_MEASUREMENTS {
+            let [lo, hi] = m.drape_range;
+            // a drape coefficient lies between a skirt hanging from the rim (0) and a flat
+            // disc (1)
+            assert!(0.0 < lo && lo <= hi && hi < 1.0, "{}", m.name);
+            assert!(m.source.contains("doi:"), "{}", m.name);
+            assert_eq!(m.bending_rigidity().is_some(), m.density().is_some());
+            if let (Some(b), Some(rho)) = (m.bending_rigidity(), m.density()) {
+                // woven apparel fabrics: 100-200 g/m², Peirce bending length 1-3 cm
+                assert!((0.1..0.2).contains(&rho), "{}", m.name);
+                let c = (b / (rho * 9.80665)).cbrt();
+                assert!((0.01..0.03).contains(&c), "{}: c = {c}", m.name);
+            }
+        }
     }
 }
