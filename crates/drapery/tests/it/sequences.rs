@@ -187,9 +187,16 @@ fn walking_mannequin_is_closed_clean_grounded_and_turns_a_quarter_turn() {
     // |x| = 0.21 + 0.585 sin(43.3°) + 0.045 ≈ 0.66 m; between the knees and the top of the
     // hips (y 0.45–1.0 m) nothing is between 0.3 m and 0.48 m from the vertical axis, in any
     // frame: the arms leave room for a skirt around the hips and legs
-    let reach = frames[0].positions.iter().fold(0.0f64, |r, p| r.max(p.x.abs()));
+    let reach = frames[0]
+        .positions
+        .iter()
+        .fold(0.0f64, |r, p| r.max(p.x.abs()));
     assert!(reach > 0.62 && reach < 0.7, "{reach}");
-    let ground = frames[0].positions.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+    let ground = frames[0]
+        .positions
+        .iter()
+        .map(|p| p.y)
+        .fold(f64::INFINITY, f64::min);
     assert!(ground > 0.0 && ground < 0.02, "{ground}");
     let mut swing = 0.0f64;
     for (k, m) in frames.iter().enumerate() {
@@ -197,15 +204,26 @@ fn walking_mannequin_is_closed_clean_grounded_and_turns_a_quarter_turn() {
         assert_eq!(n, 0, "frame {}: {n} intersecting triangle pairs", k + 1);
         assert!(volume(&m.positions, &tris) > 0.0, "frame {}", k + 1);
         // the lower foot stays on the ground (6 printed decimals)
-        let low = m.positions.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
-        assert!((low - ground).abs() < 2e-6, "frame {}: lowest point {low}", k + 1);
+        let low = m
+            .positions
+            .iter()
+            .map(|p| p.y)
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            (low - ground).abs() < 2e-6,
+            "frame {}: lowest point {low}",
+            k + 1
+        );
         for p in m.positions.iter().filter(|p| p.y > 0.45 && p.y < 1.0) {
             let r = p.x.hypot(p.z);
             assert!(!(0.3..0.48).contains(&r), "frame {}: {p}", k + 1);
         }
         // the legs swing: how far a foot gets from where it stands, seen from the body
         // (the body's rotation about y undone through the hand's angle)
-        let (hand, hand0) = (m.positions[far(&frames[0])], frames[0].positions[far(&frames[0])]);
+        let (hand, hand0) = (
+            m.positions[far(&frames[0])],
+            frames[0].positions[far(&frames[0])],
+        );
         let yaw = (-hand.z).atan2(hand.x) - (-hand0.z).atan2(hand0.x);
         let (c, s) = (yaw.cos(), yaw.sin());
         for (p, p0) in m.positions.iter().zip(&frames[0].positions) {
