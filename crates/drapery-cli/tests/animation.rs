@@ -5,7 +5,7 @@
 //! the file and the field.
 
 mod common;
-use common::{assert_rejected, run_and_check};
+use common::{assert_rejected, run_and_check, yaw};
 use drapery::Vec3;
 use drapery::scene::Scene;
 
@@ -33,12 +33,6 @@ fn assert_handles_follow(scene: &Scene, frames: &[Vec<Vec3>]) -> usize {
         }
     }
     checked
-}
-
-/// Rotation angle about +y from `p` to `q` (counter-clockwise seen from above), in (-π, π].
-fn yaw(p: Vec3, q: Vec3) -> f64 {
-    let d = (-q.z).atan2(q.x) - (-p.z).atan2(p.x);
-    (d + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
 }
 
 #[test]

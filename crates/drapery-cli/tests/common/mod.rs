@@ -167,3 +167,9 @@ pub fn assert_rejected(extra: &str, files: &[(&str, &str)], wants: &[&str]) {
     assert_one_error(&r, wants);
     assert!(!out.exists(), "output written for bad input");
 }
+
+/// Rotation angle about +y from `p` to `q` (counter-clockwise seen from above), in (-π, π].
+pub fn yaw(p: Vec3, q: Vec3) -> f64 {
+    let d = (-q.z).atan2(q.x) - (-p.z).atan2(p.x);
+    (d + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
+}

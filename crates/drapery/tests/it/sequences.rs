@@ -7,7 +7,10 @@
 //!   `0.2 sin(…)` rad about y, through P, same period);
 //! * `examples/mannequin/` (`scripts/make_mannequin.py`): 61 frames of a surface-nets mannequin
 //!   whose arms turn sideways about the shoulders by `65° (1 - cos(2π t / 2 s)) / 2` while the
-//!   whole body turns about the vertical axis by `0.5 sin(2π t / 2 s)` rad.
+//!   whole body turns about the vertical axis by `0.5 sin(2π t / 2 s)` rad;
+//! * `examples/mannequin_walk/` (the same script): 41 frames at 20 fps of the same body in an
+//!   A-pose, walking in place (thighs swinging ±20° about the hips, knees bending up to 45°)
+//!   while it turns a quarter turn to its left in 1.6 s.
 
 use drapery::collision::check::count_self_intersections;
 use drapery::io::obj::read_obj;
@@ -20,13 +23,18 @@ use std::path::PathBuf;
 const FRAMES: usize = 61;
 const FPS: f64 = 30.0;
 
-/// The frames `<stem>_0001.obj` … of `examples/<stem>/`, all with the first frame's vertex
-/// count and faces (asserted); and the triangles.
+/// The frames `<stem>_0001.obj` … of `examples/<stem>/` (61 of them), all with the first
+/// frame's vertex count and faces (asserted); and the triangles.
 fn frames(stem: &str) -> (Vec<Mesh>, Vec<[u32; 3]>) {
+    frames_n(stem, FRAMES)
+}
+
+/// The `count` frames `<stem>_0001.obj` … of `examples/<stem>/`, as [`frames`] reads them.
+fn frames_n(stem: &str, count: usize) -> (Vec<Mesh>, Vec<[u32; 3]>) {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../examples")
         .join(stem);
-    let frames: Vec<Mesh> = (1..=FRAMES)
+    let frames: Vec<Mesh> = (1..=count)
         .map(|k| {
             let path = dir.join(format!("{stem}_{k:04}.obj"));
             read_obj(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -167,4 +175,77 @@ fn mannequin_sequence_is_a_closed_mesh_raising_its_arms() {
     let speed = 0.5 * PI * 0.9 + 65f64.to_radians() * 0.5 * PI * 0.63;
     let largest = largest_move(&frames);
     assert!(largest <= speed / FPS, "{largest} m in one frame");
+}
+
+#[test]
+fn walking_mannequin_is_closed_clean_grounded_and_turns_a_quarter_turn() {
+    let (frames, tris) = frames_n("mannequin_walk", 41);
+    assert!((4000..=6500).contains(&tris.len()), "{}", tris.len());
+    assert_closed(&tris, frames[0].vertex_count());
+    // the arms held out (A-pose): the hands (centre 0.585 m from the shoulder joint at
+    // x = ±0.21 m, 13.3° + 30° from the vertical, radius 0.045 m) reach
+    // |x| = 0.21 + 0.585 sin(43.3°) + 0.045 ≈ 0.66 m; between the knees and the top of the
+    // hips (y 0.45–1.0 m) nothing is between 0.3 m and 0.48 m from the vertical axis, in any
+    // frame: the arms leave room for a skirt around the hips and legs
+    let reach = frames[0]
+        .positions
+        .iter()
+        .fold(0.0f64, |r, p| r.max(p.x.abs()));
+    assert!(reach > 0.62 && reach < 0.7, "{reach}");
+    let ground = frames[0]
+        .positions
+        .iter()
+        .map(|p| p.y)
+        .fold(f64::INFINITY, f64::min);
+    assert!(ground > 0.0 && ground < 0.02, "{ground}");
+    let mut swing = 0.0f64;
+    for (k, m) in frames.iter().enumerate() {
+        let n = count_self_intersections(&m.positions, &tris);
+        assert_eq!(n, 0, "frame {}: {n} intersecting triangle pairs", k + 1);
+        assert!(volume(&m.positions, &tris) > 0.0, "frame {}", k + 1);
+        // the lower foot stays on the ground (6 printed decimals)
+        let low = m
+            .positions
+            .iter()
+            .map(|p| p.y)
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            (low - ground).abs() < 2e-6,
+            "frame {}: lowest point {low}",
+            k + 1
+        );
+        for p in m.positions.iter().filter(|p| p.y > 0.45 && p.y < 1.0) {
+            let r = p.x.hypot(p.z);
+            assert!(!(0.3..0.48).contains(&r), "frame {}: {p}", k + 1);
+        }
+        // the legs swing: how far a foot gets from where it stands, seen from the body
+        // (the body's rotation about y undone through the hand's angle)
+        let (hand, hand0) = (
+            m.positions[far(&frames[0])],
+            frames[0].positions[far(&frames[0])],
+        );
+        let yaw = (-hand.z).atan2(hand.x) - (-hand0.z).atan2(hand0.x);
+        let (c, s) = (yaw.cos(), yaw.sin());
+        for (p, p0) in m.positions.iter().zip(&frames[0].positions) {
+            if p0.y < 0.15 {
+                let back = Vec3::new(c * p.x - s * p.z, p.y, s * p.x + c * p.z);
+                swing = swing.max((back - *p0).length());
+            }
+        }
+    }
+    // thighs 0.87 m from hip to sole swinging by 20°: a foot moves 2 × 0.87 sin(10°) ≈ 0.3 m
+    // at least; more with the knee bent
+    assert!(swing > 0.25, "{swing}");
+    // the whole body (the hands are not skinned to the legs) turns by exactly 90°
+    let i = far(&frames[0]);
+    let (p0, p1) = (frames[0].positions[i], frames[40].positions[i]);
+    let yaw = (-p1.z).atan2(p1.x) - (-p0.z).atan2(p0.x);
+    assert!((yaw - PI / 2.0).abs() < 1e-4, "{}", yaw.to_degrees());
+}
+
+/// The vertex farthest along +x (a fingertip of the right hand).
+fn far(m: &Mesh) -> usize {
+    (0..m.positions.len())
+        .max_by(|&a, &b| m.positions[a].x.total_cmp(&m.positions[b].x))
+        .unwrap()
 }
