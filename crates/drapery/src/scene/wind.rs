@@ -1,14 +1,15 @@
 //! `[[wind]]` tables: the air's `velocity = [x, y, z]` (m/s) or
 //! `keyframes = [{ time, velocity }, ...]` (piecewise linear, held outside the keys), its
-//! `density` (kg/m³) and the normal `drag` coefficient. Errors name `wind[i].key`
+//! `density` (kg/m³), the normal `drag` coefficient and the `lift` coefficient (default 0: no
+//! lift). Errors name `wind[i].key`
 //! (`wind[0].keyframes[1].velocity`); the model checks the values.
 
 use crate::collision::colliders::Keys;
 use crate::error::Result;
-use crate::forces::wind::{AirVelocity, DEFAULT_DENSITY, DEFAULT_DRAG, Wind};
+use crate::forces::wind::{AirVelocity, DEFAULT_DENSITY, DEFAULT_DRAG, DEFAULT_LIFT, Wind};
 use std::path::Path;
 
-const KEYS: &[&str] = &["velocity", "keyframes", "density", "drag"];
+const KEYS: &[&str] = &["velocity", "keyframes", "density", "drag", "lift"];
 const KEYFRAME_KEYS: &[&str] = &["time", "velocity"];
 
 /// `keyframes = [{ time, velocity }, ...]` of wind `keys`.
@@ -51,6 +52,7 @@ pub(super) fn wind(i: usize, table: &toml::Table, dir: &Path) -> Result<Wind> {
         velocity,
         density: keys.number_or("density", DEFAULT_DENSITY)?,
         drag: keys.number_or("drag", DEFAULT_DRAG)?,
+        lift: keys.number_or("lift", DEFAULT_LIFT)?,
     })
 }
 
@@ -123,14 +125,15 @@ mod tests {
         );
     }
 
-    /// Wind and pressure (on an open sheet: a sail) step to the same bits on 1 and 2 threads.
+    /// Wind (with lift) and pressure (on an open sheet: a sail) step to the same bits on 1 and 2
+    /// threads.
     #[test]
     fn wind_and_pressure_give_the_same_bits_on_any_number_of_threads() {
         let text = scene(
             0.1,
             "[0, -9.81, 0]",
             0.2,
-            "[[wind]]\nkeyframes = [{ time = 0, velocity = [1, 0, 0] }, { time = 0.1, velocity = [0, 3, 1] }]\n",
+            "[[wind]]\nkeyframes = [{ time = 0, velocity = [1, 0, 0] }, { time = 0.1, velocity = [0, 3, 1] }]\nlift = 0.7\n",
         )
         .replace("bend_stiffness = 0\n", "bend_stiffness = 0\npressure = 20\n");
         let scene = Scene::from_str(&text, Path::new("s.toml")).unwrap();
@@ -173,6 +176,16 @@ mod tests {
     }
 
     #[test]
+    fn lift_is_read_and_defaults_to_none() {
+        let path = Path::new("s.toml");
+        let text = |extra: &str| scene(0.1, "[0, -9.81, 0]", 1.0, &format!("[[wind]]\nvelocity = [1, 0, 0]\n{extra}"));
+        let plain = Scene::from_str(&text(""), path).unwrap();
+        assert_eq!(plain.wind[0].lift, 0.0);
+        let lifted = Scene::from_str(&text("lift = 0.75\n"), path).unwrap();
+        assert_eq!(lifted.wind[0].lift, 0.75);
+    }
+
+    #[test]
     fn no_wind_table_means_no_air_force() {
         let path = Path::new("s.toml");
         let plain = Scene::from_str(&scene(0.1, "[0, -9.81, 0]", 1.0, ""), path).unwrap();
@@ -205,6 +218,18 @@ mod tests {
             (
                 "velocity = [1, 2, 3]\ndrag = -0.5\n",
                 "dir/s.toml: line 17, wind[0].drag: must be a finite number ≥ 0, got -0.5",
+            ),
+            (
+                "velocity = [1, 2, 3]\nlift = -1\n",
+                "dir/s.toml: line 17, wind[0].lift: must be a finite number ≥ 0, got -1",
+            ),
+            (
+                "velocity = [1, 2, 3]\nlift = \"some\"\n",
+                "dir/s.toml: line 17, wind[0].lift: must be a number",
+            ),
+            (
+                "velocity = [1, 2, 3]\nlift = 0.5\n\n[[wind]]\nvelocity = [0, 0, 0]\n",
+                "wind[1].lift: 0 differs from wind[0]'s 0.5",
             ),
             (
                 "velocity = [1, 2, 3]\nspeed = 1\n",
