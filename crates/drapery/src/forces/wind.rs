@@ -406,7 +406,12 @@ mod tests {
     }
 
     /// The Jacobians `jac` gives of every triangle, assembled densely.
-    fn exact(f: &WindForce, x: &[Vec3], v: &[Vec3], jac: Jacobians) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    fn exact(
+        f: &WindForce,
+        x: &[Vec3],
+        v: &[Vec3],
+        jac: Jacobians,
+    ) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
         let at = at(x, v);
         let n = x.len();
         let (dx, dv): (Vec<_>, Vec<_>) = (0..f.count()).map(|s| jac(f, s, &at)).unzip();
@@ -543,7 +548,10 @@ mod tests {
         assert!((got - want).length() < 1e-14, "{got} vs {want}");
         // the flow from below: the mirror image, lift toward -z
         let got = total(Vec3::new(c * u, 0.0, -c * u));
-        assert!((got - size * Vec3::new(-c, 0.0, -c)).length() < 1e-14, "{got}");
+        assert!(
+            (got - size * Vec3::new(-c, 0.0, -c)).length() < 1e-14,
+            "{got}"
+        );
     }
 
     #[test]
@@ -616,13 +624,19 @@ mod tests {
         let mut w = Wind::constant(Vec3::ZERO);
         w.lift = f64::NAN;
         let e = validate_winds(&[w]).unwrap_err().to_string();
-        assert!(e.starts_with("wind[0].lift: must be a finite number ≥ 0"), "{e}");
+        assert!(
+            e.starts_with("wind[0].lift: must be a finite number ≥ 0"),
+            "{e}"
+        );
         let mut w = Wind::constant(Vec3::ZERO);
         w.lift = 0.5;
         let e = validate_winds(&[Wind::constant(Vec3::X), w])
             .unwrap_err()
             .to_string();
-        assert!(e.starts_with("wind[1].lift: 0.5 differs from wind[0]'s 0"), "{e}");
+        assert!(
+            e.starts_with("wind[1].lift: 0.5 differs from wind[0]'s 0"),
+            "{e}"
+        );
         let w = Wind {
             velocity: AirVelocity::Keyframes(vec![(0.0, Vec3::X), (0.0, Vec3::Y)]),
             ..Wind::constant(Vec3::ZERO)

@@ -178,7 +178,14 @@ mod tests {
     #[test]
     fn lift_is_read_and_defaults_to_none() {
         let path = Path::new("s.toml");
-        let text = |extra: &str| scene(0.1, "[0, -9.81, 0]", 1.0, &format!("[[wind]]\nvelocity = [1, 0, 0]\n{extra}"));
+        let text = |extra: &str| {
+            scene(
+                0.1,
+                "[0, -9.81, 0]",
+                1.0,
+                &format!("[[wind]]\nvelocity = [1, 0, 0]\n{extra}"),
+            )
+        };
         let plain = Scene::from_str(&text(""), path).unwrap();
         assert_eq!(plain.wind[0].lift, 0.0);
         let lifted = Scene::from_str(&text("lift = 0.75\n"), path).unwrap();
