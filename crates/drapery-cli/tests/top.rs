@@ -58,7 +58,11 @@ fn top_is_sewn_around_the_torso_and_turns_with_the_body() {
         let widest = g.iter().copied().fold(0.0, f64::max);
         assert!(widest < 0.5 * edge_length, "frame {k}: {widest}");
         let open = g.iter().filter(|&&d| d >= th).count();
-        assert!(10 * open <= g.len(), "frame {k}: {open} of {} pairs open", g.len());
+        assert!(
+            10 * open <= g.len(),
+            "frame {k}: {open} of {} pairs open",
+            g.len()
+        );
     }
     // flat, the panels leave the sides of the chest open; sewn, they close round it: at chest
     // height (y 1.1–1.2 m) no gap around the body's axis is wider than 0.5 rad in any frame
@@ -66,15 +70,20 @@ fn top_is_sewn_around_the_torso_and_turns_with_the_body() {
     // the mannequin (scripts/make_mannequin.py): shoulders' top at 1.37 + 0.075 m, hips from
     // 0.84 m, chest of radius 0.14 m about the vertical axis (hips and arms reach 0.19 m)
     let shoulders = 1.445;
-    let start_top = initial.iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max);
+    let start_top = initial
+        .iter()
+        .map(|p| p.y)
+        .fold(f64::NEG_INFINITY, f64::max);
     for (k, x) in frames.iter().enumerate() {
         let gap = widest_gap(x, 1.1, 1.2);
         assert!(gap < 0.5, "frame {k}: a gap of {gap} rad round the chest");
         // it hangs from the shoulders: the straps, sewn over them, rest there (neither slid
         // off nor riding up above where they started flat), nothing slides to the hips
-        let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p.y), hi.max(p.y))
-        });
+        let (lo, hi) = x
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p.y), hi.max(p.y))
+            });
         assert!(
             hi > shoulders - 0.03 && hi < start_top,
             "frame {k}: top at y = {hi}"
