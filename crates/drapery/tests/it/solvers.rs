@@ -285,3 +285,60 @@ fn a_preconditioner_built_from_the_uncoupled_matrix_still_solves_the_coupled_sys
         }
     }
 }
+
+/// The obstacle active set's later rounds keep the multigrid cycle of the first round
+/// (`solve_preconditioned_again`): with the cycle refreshed for one filter (a pin, contacts
+/// held along random normals) and then a solve with another (some contacts released, others
+/// held, new prescribed values), PCG still converges to the second system's solution, the
+/// direct solve's, whether or not the product could have used the multigrid's filtered copy
+/// (the same matrix as `a` and `p`, or another `p`).
+#[test]
+fn a_multigrid_cycle_refreshed_for_another_filter_still_solves_the_filtered_system() {
+    let mut sim = hanging_cloth(
+        24,
+        SolverSettings::default(),
+        material(MassSpec::Density(0.1)),
+    );
+    for _ in 0..10 {
+        sim.step(1.0 / 60.0).unwrap();
+    }
+    let a = sim.matrix().clone();
+    let n = a.n();
+    let mut rng = Lcg(5);
+    let b: Vec<Vec3> = (0..n).map(|_| rng.vec3()).collect();
+    let filter = |held: &[usize], rng: &mut Lcg| {
+        let (mut s, mut z) = (sim.model().pin_filter(), vec![Vec3::ZERO; n]);
+        for &i in held {
+            let normal = rng.vec3().normalize();
+            s[i] = Mat3::IDENTITY - outer(normal, normal);
+            z[i] = 0.1 * rng.vec3().x * normal;
+        }
+        (s, z)
+    };
+    let (s0, z0) = filter(&(100..160).collect::<Vec<_>>(), &mut rng);
+    let (s1, z1) = filter(&(130..200).collect::<Vec<_>>(), &mut rng);
+    let mut exact = vec![Vec3::ZERO; n];
+    DirectSolver::default()
+        .solve(&a, &b, &s1, &z1, &mut exact, true)
+        .unwrap();
+    let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.length()));
+    let settings = PcgSettings {
+        tolerance: 1e-12,
+        max_iterations: 5000,
+        preconditioner: Preconditioner::Multigrid,
+    };
+    let mut p = a.clone();
+    p.add(0, 0, Mat3::IDENTITY * 1e-3);
+    for pre in [&a, &p] {
+        let mut w = PcgScratch::default();
+        let mut x = vec![Vec3::ZERO; n];
+        let first = pcg::solve_preconditioned_by(&a, pre, &b, &s0, &z0, &mut x, &settings, &mut w);
+        assert!(first.converged && w.multigrid().level_count() > 1);
+        let again =
+            pcg::solve_preconditioned_again(&a, pre, &b, &s1, &z1, &mut x, &settings, &mut w);
+        assert!(again.converged, "{again:?}");
+        for i in 0..n {
+            assert!((x[i] - exact[i]).length() < 1e-8 * scale, "particle {i}");
+        }
+    }
+}
