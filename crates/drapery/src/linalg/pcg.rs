@@ -127,59 +127,16 @@ pub fn solve_preconditioned_by(
     settings: &PcgSettings,
     w: &mut PcgScratch,
 ) -> SolveStats {
-    solve_with(a, p, b, s, z, x, settings, w, false)
-}
-
-/// [`solve_preconditioned_by`] keeping the multigrid cycle `V` of the last solve, which was
-/// refreshed from this same `p` but with another filter `S₀`, instead of refreshing it for
-/// `s` (the obstacle active set's later rounds, where only a few contacts' filters changed).
-/// The preconditioner is then `S V S`: `V` is symmetric positive definite on the whole space
-/// (its finest matrix `S₀ A S₀ + (I − S₀)` is), so `S V S` is positive definite on the free
-/// subspace of `s` whatever `S₀` was, and PCG converges to the same filtered system's solution
-/// at the same tolerance; only the iteration count depends on how close `S₀` is to `s`. The
-/// product uses `a` itself (the multigrid's filtered copy holds `S₀`). Without a multigrid
-/// (or before any refresh) this is [`solve_preconditioned_by`].
-#[allow(clippy::too_many_arguments)]
-pub fn solve_preconditioned_again(
-    a: &BlockMatrix,
-    p: &BlockMatrix,
-    b: &[Vec3],
-    s: &[Mat3],
-    z: &[Vec3],
-    x: &mut [Vec3],
-    settings: &PcgSettings,
-    w: &mut PcgScratch,
-) -> SolveStats {
-    let keep = w.amg.level_count() > 0;
-    solve_with(a, p, b, s, z, x, settings, w, keep)
-}
-
-/// The solves above: `keep` keeps the multigrid's cycle as it is.
-#[allow(clippy::too_many_arguments)]
-fn solve_with(
-    a: &BlockMatrix,
-    p: &BlockMatrix,
-    b: &[Vec3],
-    s: &[Mat3],
-    z: &[Vec3],
-    x: &mut [Vec3],
-    settings: &PcgSettings,
-    w: &mut PcgScratch,
-    keep: bool,
-) -> SolveStats {
     let n = a.n();
     debug_assert_eq!(p.n(), n);
     for v in [&mut w.r, &mut w.c, &mut w.q, &mut w.s] {
         v.resize(n, Vec3::ZERO);
     }
     let multigrid = settings.preconditioner == Preconditioner::Multigrid;
-    // the multigrid holds the filtered `p` in half the bytes: the product's matrix when `p` is
-    // `a` and the filter is this solve's
-    let filtered_product = multigrid && std::ptr::eq(a, p) && !keep;
+    // the multigrid holds the filtered `p` in half the bytes: the product's matrix when `p` is `a`
+    let filtered_product = multigrid && std::ptr::eq(a, p);
     if multigrid {
-        if !keep {
-            w.amg.refresh(p, s);
-        }
+        w.amg.refresh(p, s);
     } else {
         w.pinv.resize(n, Mat3::IDENTITY);
         w.pinv

@@ -121,7 +121,7 @@ pub(crate) fn on_active_set(
         });
         let t = std::time::Instant::now();
         report.linear_solves += 1;
-        linear(system, solvers, settings, rhs, c, dv, it, round > 0, report)?;
+        linear(system, solvers, settings, rhs, c, dv, it, report)?;
         let mut done = set.is_empty();
         if !done {
             set.measure(system.matrix(), rhs, dv, r);
@@ -135,11 +135,7 @@ pub(crate) fn on_active_set(
     Ok(())
 }
 
-/// One linear solve with the constraints `c` into `dv` (its initial guess on entry). `again`:
-/// a later round of the same iteration (same matrices, other held contacts), which keeps the
-/// multigrid cycle of the iteration's first round instead of refreshing it for `c`
-/// ([`pcg::solve_preconditioned_again`]: the same solution at the same tolerance, one
-/// refresh per Newton iteration instead of one per round).
+/// One linear solve with the constraints `c` into `dv` (its initial guess on entry).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn linear(
     system: &System,
@@ -149,7 +145,6 @@ pub(crate) fn linear(
     c: &Constraints,
     dv: &mut [Vec3],
     it: u32,
-    again: bool,
     report: &mut StepReport,
 ) -> Result<(), String> {
     match settings.linear_solver {
@@ -159,12 +154,7 @@ pub(crate) fn linear(
                 max_iterations: settings.max_iterations,
                 preconditioner: settings.preconditioner,
             };
-            let solve = if again {
-                pcg::solve_preconditioned_again
-            } else {
-                pcg::solve_preconditioned_by
-            };
-            let stats = solve(
+            let stats = pcg::solve_preconditioned_by(
                 system.matrix(),
                 system.preconditioner(),
                 rhs,
