@@ -23,8 +23,9 @@ pub(crate) struct Contacts {
     pub obstacle: Vec<ObstacleContact>,
     /// Cloth–cloth repulsion stencils (none without self-collision or close pairs).
     pub repulsions: Option<Repulsions>,
-    /// Broad-phase candidate pairs of the self-contacts, and broad-phase builds (0 or 1).
+    /// Broad-phase candidate pairs of the self-contacts.
     pub candidates: usize,
+    /// Broad-phase builds (1 with self-collision, else 0).
     pub builds: usize,
 }
 
