@@ -138,8 +138,10 @@ fn every_standard_scene_runs_one_frame() {
     assert_eq!(standard.len(), 15, "{standard:?}");
     assert_eq!(names, standard);
     rows.iter().for_each(check_row);
-    // The first step from rest starts the PCG from zero against gravity: it must iterate.
-    assert!(rows.iter().all(|r| r.cg >= 1.0));
+    // The first step from rest starts the PCG from zero against gravity: it must iterate (the
+    // spin scenes' later steps of the frame, in free fall, start from the exact warm start;
+    // the table rounds to 0.1)
+    assert!(rows.iter().all(|r| r.cg >= 1.0 / r.steps as f64 - 0.05));
 }
 
 #[test]
