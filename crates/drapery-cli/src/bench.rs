@@ -7,6 +7,12 @@
 //! Two textile scenes on the shell model, `N` their **edge length in mm**: `cantilever-N`, a
 //! 16 cm strip clamped at one end sagging (tests/it/textile.rs), and `cusick-N`, a 30 cm
 //! cotton disc draping over an 18 cm support (tests/it/drape.rs).
+//! `spin-N`: the rotating sphere of issue 18, a 1.6 m cloth of N × N vertices dropped onto a
+//! sphere of radius 0.5 m spinning at 180°/s (friction 0.4, self-collision on), at dt = 0.01 s,
+//! 4 steps per frame; `spin-free-N` is the same cloth without collisions, warmed up as
+//! `spin-N` and timed from that draped state (the cost of contacts is the ratio of the two).
+//! `--write-scenes DIR` writes the spin scenes as scene files (`DIR/spin-N.toml`, `--frames`
+//! frames long) instead of timing anything, for `drapery run` and `drapery check --scene`.
 //! Shipped examples by name, read from the source tree's `examples/` (so these run from a
 //! source checkout), pre-rolled untimed as `drapery run` does, then timed at their own step,
 //! steps per frame and solver settings (`--tolerance` does not apply): `skirt`, the
@@ -37,7 +43,7 @@ use std::time::Instant;
 #[derive(Args)]
 pub struct BenchArgs {
     /// Scenes to run, comma-separated (e.g. hang-64,drape-64); default: all standard scenes
-    /// hang-32,hang-64,hang-128,hang-256,drape-64,drape-128,pile-64,pile-128,twist-64,twist-128,cantilever-5,cusick-5,skirt.
+    /// hang-32,hang-64,hang-128,hang-256,drape-64,drape-128,pile-64,pile-128,twist-64,twist-128,cantilever-5,cusick-5,skirt,spin-129,spin-290.
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
     /// Timed frames per run.
@@ -57,6 +63,10 @@ pub struct BenchArgs {
     /// smoke run.
     #[arg(long, value_name = "FRAMES")]
     warm_up: Option<usize>,
+    /// Write the chosen spin scenes as scene files `DIR/spin-N.toml` of `--frames` frames (at
+    /// `--tolerance`) instead of timing them.
+    #[arg(long, value_name = "DIR")]
+    write_scenes: Option<PathBuf>,
 }
 
 const STANDARD: &[&str] = &[
@@ -73,6 +83,8 @@ const STANDARD: &[&str] = &[
     "cantilever-5",
     "cusick-5",
     "skirt",
+    "spin-129",
+    "spin-290",
 ];
 
 /// Benchmark scenes that are shipped examples: name and file in the source tree's `examples/`.
@@ -97,6 +109,8 @@ fn parse(name: &str) -> Result<Bench> {
 /// A scene ready to time.
 struct Built {
     sim: Simulation,
+    /// The simulation timed after the warm-up, when it is not `sim` (it takes `sim`'s state).
+    timed: Option<Simulation>,
     /// Untimed frames first.
     warm: usize,
     /// The step, s, and steps per frame.
@@ -108,17 +122,26 @@ struct Built {
 /// example's pre-roll is done here, untimed).
 fn scene(name: &str, tolerance: f64, warm_up: Option<usize>) -> Result<Built> {
     Ok(match parse(name)? {
-        Bench::Preset(preset, n) => Built {
-            sim: preset.simulation(n, tolerance)?,
-            warm: warm_up.unwrap_or(preset.warm_up_frames()),
-            h: 1.0 / 60.0,
-            steps: 1,
-        },
+        Bench::Preset(preset, n) => {
+            let (h, steps) = preset.step();
+            let warm = preset.warm_up_scene();
+            let timed = (warm != preset)
+                .then(|| preset.simulation(n, tolerance))
+                .transpose()?;
+            Built {
+                sim: warm.simulation(n, tolerance)?,
+                timed,
+                warm: warm_up.unwrap_or(preset.warm_up_frames()),
+                h,
+                steps,
+            }
+        }
         Bench::Example(path) => {
             let scene = drapery::scene::Scene::load(&path)
                 .with_context(|| format!("scene {name}: {}", path.display()))?;
             Built {
                 sim: scene.start()?,
+                timed: None,
                 warm: warm_up.unwrap_or(0),
                 h: scene.step_size(),
                 steps: scene.steps_per_frame(),
@@ -166,6 +189,7 @@ fn run_once(args: &BenchArgs, name: &str, dir: &std::path::Path) -> Result<RunTi
     let (frames, tolerance) = (args.frames, args.tolerance);
     let Built {
         mut sim,
+        timed,
         warm,
         h,
         steps,
@@ -173,6 +197,11 @@ fn run_once(args: &BenchArgs, name: &str, dir: &std::path::Path) -> Result<RunTi
     for _ in 0..warm * steps {
         sim.step(h)
             .with_context(|| format!("scene {name} (warm-up)"))?;
+    }
+    if let Some(mut next) = timed {
+        next.set_positions(sim.positions())?;
+        next.set_velocities(sim.velocities())?;
+        sim = next;
     }
     let mut t = RunTimes::default();
     let mut writer = Writer::start(ObjFile {
@@ -209,6 +238,23 @@ fn run_once(args: &BenchArgs, name: &str, dir: &std::path::Path) -> Result<RunTi
     })
 }
 
+/// `--write-scenes`: each spin scene as `DIR/NAME.toml`; other scenes are refused.
+fn write_scenes(scenes: &[String], dir: &std::path::Path, frames: usize, tol: f64) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+    for name in scenes {
+        let n = match parse(name)? {
+            Bench::Preset(Preset::Spin, n) => n,
+            _ => bail!("--write-scenes: scene {name} has no scene file (only spin-N scenes do)"),
+        };
+        let path = dir.join(format!("{name}.toml"));
+        let text = drapery::presets::spin_scene(n, frames, tol);
+        drapery::io::write_atomic(&path, text.as_bytes())
+            .with_context(|| path.display().to_string())?;
+        println!("{}", path.display());
+    }
+    Ok(())
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
@@ -232,6 +278,9 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     for s in &scenes {
         parse(s)?; // check every name before running anything
     }
+    if let Some(dir) = &args.write_scenes {
+        return write_scenes(&scenes, dir, args.frames, args.tolerance);
+    }
     let dir = std::env::temp_dir().join(format!("drapery-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).with_context(|| dir.display().to_string())?;
     let warm_up = match args.warm_up {
@@ -239,7 +288,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         None => String::new(),
     };
     println!(
-        "drapery bench: {} timed frames x {} runs per scene{warm_up}, presets 1 step per frame (dt = 1/60 s), examples their own steps and solver, tolerance {:e}, {} threads",
+        "drapery bench: {} timed frames x {} runs per scene{warm_up}, presets 1 step per frame (dt = 1/60 s) but spin 4 (dt = 0.01 s), examples their own steps and solver, tolerance {:e}, {} threads",
         args.frames,
         args.runs,
         args.tolerance,
@@ -249,7 +298,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         "output runs on a writer thread, overlapped with the next step; wait: the step loop blocked on the writer"
     );
     println!(
-        "{:<10} {:>8} {:>10} {:>6} {:>8} {:>10} {:>9} {:>10} {:>8} {:>6} {:>9}",
+        "{:<13} {:>8} {:>10} {:>6} {:>8} {:>10} {:>9} {:>10} {:>8} {:>6} {:>9}",
         "scene",
         "vertices",
         "ms/frame",
@@ -271,7 +320,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             // the model's own vertex count (the textile scenes' size is an edge length)
             let (vertices, steps) = (runs[0].vertices, runs[0].steps);
             println!(
-                "{:<10} {:>8} {:>10.2} {:>6} {:>8.1} {:>10.2} {:>9.2} {:>10.2} {:>8.2} {:>6.2} {:>9}",
+                "{:<13} {:>8} {:>10.2} {:>6} {:>8.1} {:>10.2} {:>9.2} {:>10.2} {:>8.2} {:>6.2} {:>9}",
                 s,
                 vertices,
                 m(|r| r.frame_ms),

@@ -19,6 +19,18 @@
 //! * [`Preset::Cusick`]: the Cusick drape test of `tests/it/drape.rs`, a 30 cm disc of the
 //!   `cotton` preset falling onto an 18 cm support cylinder (mesh collider, no
 //!   self-collision, thickness 2 mm, friction 0.3).
+//!
+//! The rotating sphere of issue 18 (the size of the IPC paper's scene), stepped at dt = 0.01 s,
+//! 4 steps per frame (25 frames per second), defined once as scene text ([`spin_scene`]) so
+//! that `drapery run` and `drapery check --scene` can run the very scene the bench times:
+//!
+//! * [`Preset::Spin`]: a 1.6 m cloth of `n × n` vertices (0.1 kg/m², the springs above)
+//!   dropped from 2 cm onto a sphere of radius 0.5 m spinning about the vertical axis at
+//!   180°/s, friction 0.4, self-collision on (thickness 2 mm: below half a diagonal of the
+//!   290² grid, so that the flat cloth has no close pairs with itself);
+//! * [`Preset::SpinFree`]: the same cloth without collisions. The bench warms it up as
+//!   [`Preset::Spin`] ([`Preset::warm_up_scene`]) and times it from that draped state, so that
+//!   the ratio of the two is what contacts cost on the same cloth doing the same work.
 
 use crate::animation::{Interpolation, Keyframe, Motion, Track};
 use crate::collision::colliders::{Collider, Plane, Shape, Sphere, TriangleMesh};
@@ -43,6 +55,10 @@ pub enum Preset {
     Cantilever,
     /// A shell disc draping over the Cusick support (size: edge length in mm).
     Cusick,
+    /// Dropped onto a spinning sphere (issue 18).
+    Spin,
+    /// The spinning sphere's cloth without collisions.
+    SpinFree,
 }
 
 impl Preset {
@@ -50,7 +66,7 @@ impl Preset {
     pub fn parse(name: &str) -> Result<(Preset, usize)> {
         let bad = |why: String| Error::Invalid(format!("scene '{name}': {why}"));
         let (kind, n) = name
-            .split_once('-')
+            .rsplit_once('-')
             .ok_or_else(|| bad("expected KIND-SIZE, e.g. hang-64".into()))?;
         let n: usize = n
             .parse()
@@ -64,9 +80,11 @@ impl Preset {
             "twist" => Preset::Twist,
             "cantilever" => Preset::Cantilever,
             "cusick" => Preset::Cusick,
+            "spin" => Preset::Spin,
+            "spin-free" => Preset::SpinFree,
             _ => {
                 return Err(bad(format!(
-                    "unknown kind '{kind}' (hang, drape, pile, twist, cantilever or cusick)"
+                    "unknown kind '{kind}' (hang, drape, pile, twist, cantilever, cusick, spin or spin-free)"
                 )));
             }
         };
@@ -82,6 +100,25 @@ impl Preset {
             Preset::Twist => 90,
             Preset::Cantilever => 5,
             Preset::Cusick => 30,
+            Preset::Spin | Preset::SpinFree => 25,
+        }
+    }
+
+    /// The scene whose warm-up frames come before this one's timed frames: [`Preset::Spin`]
+    /// for [`Preset::SpinFree`] (timed from the draped state), the scene itself otherwise.
+    pub fn warm_up_scene(self) -> Preset {
+        match self {
+            Preset::SpinFree => Preset::Spin,
+            p => p,
+        }
+    }
+
+    /// The step, s, and steps per frame: 0.01 s and 4 for the spinning sphere, one step of
+    /// 1/60 s per frame for the others.
+    pub fn step(self) -> (f64, usize) {
+        match self {
+            Preset::Spin | Preset::SpinFree => (SPIN_DT, SPIN_STEPS_PER_FRAME),
+            _ => (1.0 / 60.0, 1),
         }
     }
 
@@ -90,6 +127,13 @@ impl Preset {
         match self {
             Preset::Cantilever => return cantilever(n as f64 * 1e-3),
             Preset::Cusick => return cusick(n as f64 * 1e-3),
+            Preset::Spin => return spin(n),
+            Preset::SpinFree => {
+                let mut m = spin(n)?;
+                m.collision = None;
+                m.obstacles.clear();
+                return Ok(m);
+            }
             _ => {}
         }
         let material = Material {
@@ -181,6 +225,65 @@ impl Preset {
         };
         Simulation::new(self.model(n)?, settings)
     }
+}
+
+/// The spinning sphere's step, s.
+const SPIN_DT: f64 = 0.01;
+/// Frames per second of the spinning sphere.
+const SPIN_FPS: f64 = 25.0;
+/// Steps per frame of the spinning sphere: 1/(25 × 0.01).
+const SPIN_STEPS_PER_FRAME: usize = 4;
+
+/// The rotating-sphere scene at `n × n` vertices as scene text, `frames` frames long, at PCG
+/// tolerance `tolerance` (the bench's solver settings: at most 20 000 iterations, one Newton
+/// iteration). The one definition of the scene: [`Preset::Spin`] reads it back.
+pub fn spin_scene(n: usize, frames: usize, tolerance: f64) -> String {
+    let duration = frames as f64 / SPIN_FPS;
+    format!(
+        r#"# drapery bench scene spin-{n}: the rotating sphere of issue 18 (the IPC paper's scene).
+# A 1.6 m cloth of {n} x {n} vertices dropped from 2 cm onto a sphere of radius 0.5 m spinning
+# about the vertical axis at 180 degrees per second, friction 0.4, self-collision on.
+# Written by `drapery bench --write-scenes`; run with `drapery run`, verify with `drapery check --scene`.
+
+[simulation]
+duration = {duration:?}
+dt = {SPIN_DT:?}
+frame_rate = {SPIN_FPS:?}
+
+[solver]
+tolerance = {tolerance:e}
+max_iterations = 20000
+
+[collision]
+thickness = 0.002
+self_collision = true
+friction = 0.4
+stiffness = 1000.0
+
+[[cloth]]
+name = "spin"
+grid = {{ size = [1.6, 1.6], resolution = [{n}, {n}], center = [0.0, 0.52, 0.0], normal = [0.0, 1.0, 0.0] }}
+density = 0.1
+stretch_stiffness = 1000.0
+shear_stiffness = 100.0
+bend_stiffness = 1.0
+damping = 0.01
+
+[[collider]]
+shape = "sphere"
+center = [0.0, 0.0, 0.0]
+radius = 0.5
+friction = 0.4
+angular_velocity = [0.0, {omega:?}, 0.0]
+"#,
+        omega = std::f64::consts::PI,
+    )
+}
+
+/// [`Preset::Spin`]'s model: [`spin_scene`] read back.
+fn spin(n: usize) -> Result<Model> {
+    let name = format!("spin-{n}.toml");
+    crate::scene::Scene::from_str(&spin_scene(n, 1, 1e-3), std::path::Path::new(&name))?.model()
 }
 
 /// The cantilever: a 16 cm strip past a level clamp at x = 0, 4 cm wide, at edge length `h` m,
@@ -302,11 +405,24 @@ mod tests {
         assert_eq!(Preset::parse("pile-2").unwrap(), (Preset::Pile, 2));
         assert_eq!(Preset::parse("twist-128").unwrap(), (Preset::Twist, 128));
         assert_eq!(Preset::parse("cusick-10").unwrap(), (Preset::Cusick, 10));
+        assert_eq!(Preset::parse("spin-290").unwrap(), (Preset::Spin, 290));
+        assert_eq!(
+            Preset::parse("spin-free-129").unwrap(),
+            (Preset::SpinFree, 129)
+        );
         assert_eq!(
             Preset::parse("cantilever-5").unwrap(),
             (Preset::Cantilever, 5)
         );
-        for bad in ["hang", "hang-1", "hang-x", "swing-64", "drape-5000"] {
+        for bad in [
+            "hang",
+            "hang-1",
+            "hang-x",
+            "swing-64",
+            "drape-5000",
+            "spin-free",
+            "free-64",
+        ] {
             assert!(Preset::parse(bad).is_err(), "{bad}");
         }
     }
@@ -416,5 +532,60 @@ mod tests {
         assert!((m.total_mass() - f.density * area).abs() < 1e-12);
         assert_eq!(m.obstacles.len(), 1);
         assert!(m.collision.is_some_and(|c| !c.self_collision));
+    }
+
+    /// The spinning sphere's text is a scene `drapery run` reads: 100 frames at 25 per second
+    /// are 400 steps of 0.01 s; the model is the 1.6 m cloth over a sphere of radius 0.5 m
+    /// turning at π rad/s about +y with friction 0.4; spin-free is the same cloth alone.
+    #[test]
+    fn spin_scene_text_is_the_preset() {
+        let n = 9;
+        let text = spin_scene(n, 100, 1e-3);
+        let scene = crate::scene::Scene::from_str(&text, std::path::Path::new("s.toml")).unwrap();
+        assert_eq!(scene.frame_count(), 100);
+        assert_eq!(scene.steps_per_frame(), 4);
+        assert!((scene.step_size() - 0.01).abs() < 1e-15);
+        assert_eq!(Preset::Spin.step(), (scene.step_size(), 4));
+        let m = Preset::Spin.model(n).unwrap();
+        assert_eq!(m.particle_count(), n * n);
+        let (lo, hi) =
+            m.x.iter()
+                .fold((Vec3::MAX, Vec3::MIN), |(a, b), p| (a.min(*p), b.max(*p)));
+        assert!(
+            ((hi - lo) - Vec3::new(1.6, 0.0, 1.6)).length() < 1e-12,
+            "{lo} {hi}"
+        );
+        assert!((m.total_mass() - 0.1 * 1.6 * 1.6).abs() < 1e-12);
+        let c = m.collision.unwrap();
+        assert!(c.self_collision && c.friction == 0.4);
+        assert_eq!(m.obstacles.len(), 1);
+        let o = &m.obstacles[0];
+        assert_eq!(o.friction, 0.4);
+        // a point on the equator at +x moves toward −z: 180°/s about +y at 0.5 m
+        let p = o.collider.transform_point(Vec3::new(0.5, 0.0, 0.0), 0.5);
+        assert!((p - Vec3::new(0.0, 0.0, -0.5)).length() < 1e-12, "{p}");
+        let free = Preset::SpinFree.model(n).unwrap();
+        assert!(free.collision.is_none() && free.obstacles.is_empty());
+        assert_eq!(free.x, m.x);
+        assert_eq!(Preset::SpinFree.warm_up_scene(), Preset::Spin);
+    }
+
+    /// Friction drags the cloth round with the sphere: after a second (a third of a turn of the
+    /// sphere) the cloth's angular momentum about the vertical axis has the sphere's sign, and
+    /// no cloth vertex is inside the sphere.
+    #[test]
+    fn the_spinning_sphere_turns_the_cloth_its_way() {
+        let mut sim = Preset::Spin.simulation(17, 1e-3).unwrap();
+        let (h, steps) = Preset::Spin.step();
+        for _ in 0..25 * steps {
+            sim.step(h).unwrap();
+        }
+        let m = sim.model();
+        let l: f64 = (0..m.particle_count())
+            .map(|i| m.mass[i] * m.x[i].cross(m.v[i]).y)
+            .sum();
+        assert!(l > 0.0, "angular momentum about +y {l}");
+        let inside = m.x.iter().filter(|p| p.length() < 0.5).count();
+        assert_eq!(inside, 0);
     }
 }

@@ -35,6 +35,11 @@ pub struct FailsafeReport {
     pub ccd_hits: usize,
     /// CCD rounds run.
     pub rounds: usize,
+    /// Candidate pairs whose times of impact were tested (over all rounds).
+    pub candidates: usize,
+    /// Swept-box builds (the first round's, and one per round where a carry moved a vertex out
+    /// of its box).
+    pub builds: usize,
     /// Particles that started within a tenth of the thickness of (or inside) an analytic
     /// obstacle and were only projected out at the end of the step: their displacement is a
     /// position correction, not a velocity.
@@ -272,7 +277,10 @@ pub fn failsafe(
         let cloth = ids.iter().filter(|&&i| is_cloth(i)).count();
         cloth > 0 && (cloth < ids.len() || self_collision) && !exempt(ids)
     };
+    // the pairs tested, counted for the step's report (the count does not depend on the order)
+    let tested = std::sync::atomic::AtomicUsize::new(0);
     let impact = |ids: [u32; 4], vt: bool, ye: &[Vec3]| {
+        tested.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         keep(&ids).then(|| impact(ids, vt, &ys0, ye, tol)).flatten()
     };
     let vt_ids = |v: u32, t: u32| vertex_triangle_ids(&tris, v, t);
@@ -293,6 +301,7 @@ pub fn failsafe(
     // the boxes are built once and later rounds re-test only the pairs of the vertices that
     // moved (rebuilt when a vertex is carried by an obstacle instead: that leaves its box).
     let mut boxes = SweptBoxes::new(&ys0, &ye, &tris, &all_edges, tol);
+    report.builds += 1;
     let mut hits = all_hits(&boxes, &ye);
     let mut moved = vec![false; ye.len()];
     // Every round that finds a hit changes some vertex (a pull-back, or a carry), or makes no
@@ -304,6 +313,7 @@ pub fn failsafe(
         report.rounds = round + 1;
         if hits.is_empty() {
             x1.copy_from_slice(&ye[..n]);
+            report.candidates = tested.into_inner();
             return Ok(report);
         }
         report.ccd_hits += hits.len();
@@ -349,6 +359,7 @@ pub fn failsafe(
         }
         if carry_changed {
             boxes = SweptBoxes::new(&ys0, &ye, &tris, &all_edges, tol);
+            report.builds += 1;
             hits = all_hits(&boxes, &ye);
             continue;
         }

@@ -23,6 +23,10 @@ pub(crate) struct Contacts {
     pub obstacle: Vec<ObstacleContact>,
     /// Cloth–cloth repulsion stencils (none without self-collision or close pairs).
     pub repulsions: Option<Repulsions>,
+    /// Broad-phase candidate pairs of the self-contacts.
+    pub candidates: usize,
+    /// Broad-phase builds (1 with self-collision, else 0).
+    pub builds: usize,
 }
 
 /// The contacts at the start of the step (none with collisions off).
@@ -48,8 +52,10 @@ pub(crate) fn contacts(
         c.thickness,
         model.gravity.length() * pose.h,
     );
+    let (mut pairs, mut builds) = (0, 0);
     let repulsions = if c.self_collision {
         let cand = candidates(x0, x0, triangles, edges, c.thickness);
+        (pairs, builds) = (cand.vt.len() + cand.ee.len(), 1);
         let mut stencils = proximities(x0, triangles, edges, &cand, c.thickness);
         stencils.retain(|s| {
             s.particles.iter().any(|&p| !pose.pinned[p as usize]) && !exempt(&s.particles)
@@ -70,6 +76,8 @@ pub(crate) fn contacts(
     Contacts {
         obstacle,
         repulsions,
+        candidates: pairs,
+        builds,
     }
 }
 

@@ -4,14 +4,15 @@
 //! theirs (a position correction, not a motion).
 
 use super::pose::Pose;
-use crate::collision::failsafe::failsafe;
+use crate::collision::failsafe::{FailsafeReport, failsafe};
 use crate::collision::settings::CollisionSettings;
 use crate::math::Vec3;
 use crate::model::Model;
 
 /// Corrects the end-of-step positions `x` (and the velocities of the particles it moved),
-/// letting through the pairs `exempt` names (see [`failsafe`]); returns the colliding pairs CCD
-/// found, or why collisions could not be resolved.
+/// letting through the pairs `exempt` names (see [`failsafe`]); returns what it did (colliding
+/// pairs CCD found, pairs tested, rounds, swept-box builds), or why collisions could not be
+/// resolved.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run(
     model: &Model,
@@ -23,7 +24,7 @@ pub(crate) fn run(
     x0: &[Vec3],
     x: &mut [Vec3],
     v: &mut [Vec3],
-) -> Result<usize, String> {
+) -> Result<FailsafeReport, String> {
     let h = pose.h;
     let before = x.to_vec();
     let r = failsafe(
@@ -48,7 +49,7 @@ pub(crate) fn run(
             v[i] = (x[i] - x0[i]) / h;
         }
     }
-    Ok(r.ccd_hits)
+    Ok(r)
 }
 
 #[cfg(test)]

@@ -192,6 +192,8 @@ impl Simulation {
         });
         let repulsions = contacts.repulsions.as_ref();
         report.self_contacts = repulsions.map_or(0, |r| r.stencils.len());
+        report.proximity_candidates = contacts.candidates;
+        report.broad_phase_builds = contacts.builds;
 
         // Newton iterations on v; x = x₀ + h v except at the first linearization point.
         let mut work = std::mem::take(&mut self.work);
@@ -289,7 +291,7 @@ impl Simulation {
             strain::run(limits, mass, &pose.pinned, h, &mut x, &mut v)
         });
         if let Some(c) = &self.model.collision {
-            report.ccd_hits = timed(&mut report.stages.failsafe, || {
+            let r = timed(&mut report.stages.failsafe, || {
                 failsafe::run(
                     &self.model,
                     c,
@@ -303,6 +305,10 @@ impl Simulation {
                 )
             })
             .map_err(|e| at.fail(e))?;
+            report.ccd_hits = r.ccd_hits;
+            report.ccd_candidates = r.candidates;
+            report.ccd_rounds = r.rounds;
+            report.broad_phase_builds += r.builds;
             let t1 = self.time + h;
             untangled = Some(tangles.update(&self.model, &self.triangles, &x, t1, c.thickness));
         }
