@@ -1,14 +1,15 @@
 //! Which matrices a step uses and why.
 //!
 //! * The **system matrix** `A = M - h D - h² K` of the Newton iteration, on the pattern of the
-//!   model's forces, enlarged by this step's cloth–cloth contact pairs when there are any.
+//!   model's forces, enlarged by this step's contact pairs (cloth–cloth, cloth–collider) when there
+//!   are any.
 //! * Without contacts the mass and the model's forces are assembled straight into it.
 //! * With contacts they are assembled into the **base matrix** (the fixed pattern of the model's
 //!   forces), copied into the enlarged system matrix, and the contact blocks added there; the
 //!   **preconditioner matrix** is the base matrix plus the contacts' diagonal blocks (their
 //!   coupling left out), so the multigrid keeps one structure for the whole run.
 
-use crate::forces::{Force, Linearization, Repulsions};
+use crate::forces::{Force, Linearization};
 use crate::linalg::BlockMatrix;
 use crate::math::{Mat3, Vec3};
 
@@ -71,40 +72,38 @@ impl System {
     }
 
     /// Sets the system matrix's pattern for this step: the base pattern, or the base plus the
-    /// contact pairs (then also where each base block goes in it).
-    pub fn use_contacts(&mut self, contact: Option<&Repulsions>) {
+    /// contact pairs of the `contacts` forces (then also where each base block goes in it).
+    pub fn use_contacts(&mut self, contacts: &[&dyn Force]) {
         let n = self.base.n();
-        match contact {
-            Some(r) => {
-                let mut pairs = self.base_pairs.clone();
+        if !contacts.is_empty() {
+            let mut pairs = self.base_pairs.clone();
+            for r in contacts {
                 r.add_pattern(&mut pairs);
-                self.matrix = BlockMatrix::from_pairs(n, &pairs);
-                let (base, merged) = (&self.base, &self.matrix);
-                self.base_slots.clear();
-                for i in 0..n {
-                    let (cols, _) = base.row(i);
-                    let (mcols, mr) = merged.row(i);
-                    let mut k = 0;
-                    for c in cols {
-                        while mcols[k] != *c {
-                            k += 1;
-                        }
-                        self.base_slots.push((mr.start + k) as u32);
+            }
+            self.matrix = BlockMatrix::from_pairs(n, &pairs);
+            let (base, merged) = (&self.base, &self.matrix);
+            self.base_slots.clear();
+            for i in 0..n {
+                let (cols, _) = base.row(i);
+                let (mcols, mr) = merged.row(i);
+                let mut k = 0;
+                for c in cols {
+                    while mcols[k] != *c {
+                        k += 1;
                     }
+                    self.base_slots.push((mr.start + k) as u32);
                 }
-                self.with_contacts = true;
             }
-            None if self.with_contacts => {
-                // shares the base pattern again (the forces' gather lists stay valid)
-                self.matrix = self.base.clone();
-                self.with_contacts = false;
-            }
-            None => {}
+            self.with_contacts = true;
+        } else if self.with_contacts {
+            // shares the base pattern again (the forces' gather lists stay valid)
+            self.matrix = self.base.clone();
+            self.with_contacts = false;
         }
     }
 
     /// Assembles `A = M + a K + b D` at `(at.x, at.v)` with `(a, b) = at.matrix` (`-h²`, `-h`
-    /// in a step): the mass and the model's `forces`, then the `contact` force if any (see the
+    /// in a step): the mass and the model's `forces`, then the `contacts` forces if any (see the
     /// module docs for where each goes). With `vectors = (f, kw)`, also adds every force
     /// (contacts last) to `f` and the products with `at.product` and `at.w` to `kw`, from the
     /// same evaluation ([`Force::add_linearization`]).
@@ -113,10 +112,10 @@ impl System {
         mass: &[f64],
         forces: &[Box<dyn Force>],
         at: &Linearization,
-        contact: Option<&Repulsions>,
+        contacts: &[&dyn Force],
         mut vectors: Option<(&mut [Vec3], &mut [Vec3])>,
     ) {
-        let base = if contact.is_some() {
+        let base = if !contacts.is_empty() {
             &mut self.base
         } else {
             &mut self.matrix
@@ -129,14 +128,16 @@ impl System {
         for force in forces {
             add(force.as_ref(), base);
         }
-        let Some(c) = contact else {
+        if contacts.is_empty() {
             return;
-        };
+        }
         self.matrix.clear();
         for (k, &slot) in self.base_slots.iter().enumerate() {
             self.matrix.values[slot as usize] = self.base.values[k];
         }
-        add(c, &mut self.matrix);
+        for c in contacts {
+            add(*c, &mut self.matrix);
+        }
         let p = &mut self.precond;
         p.values.copy_from_slice(&self.base.values);
         for i in 0..mass.len() {
@@ -173,6 +174,7 @@ mod tests {
     use super::*;
     use crate::collision::proximity::{Proximity, StencilKind};
     use crate::collision::repulsion::Penalty;
+    use crate::forces::Repulsions;
     use crate::step::{SolverSettings, testing};
 
     /// A repulsion stencil between the corners of the sheet (far apart in the mesh, so its
@@ -213,11 +215,11 @@ mod tests {
             w: &m.v,
         };
         let mut sys = System::new(m.particle_count(), &forces);
-        sys.assemble(&m.mass, &forces, &at, None, None);
+        sys.assemble(&m.mass, &forces, &at, &[], None);
         let base = sys.matrix().to_dense();
         assert!(std::ptr::eq(sys.preconditioner(), sys.matrix()));
-        sys.use_contacts(Some(&r));
-        sys.assemble(&m.mass, &forces, &at, Some(&r), None);
+        sys.use_contacts(&[&r]);
+        sys.assemble(&m.mass, &forces, &at, &[&r], None);
         let mut only = BlockMatrix::from_pairs(m.particle_count(), &{
             let mut p = Vec::new();
             r.add_pattern(&mut p);
@@ -247,8 +249,8 @@ mod tests {
         }
         assert!(coupled > 0, "the contact must couple particles");
         // back to no contacts: the base pattern again, and the same values as before
-        sys.use_contacts(None);
-        sys.assemble(&m.mass, &forces, &at, None, None);
+        sys.use_contacts(&[]);
+        sys.assemble(&m.mass, &forces, &at, &[], None);
         assert_eq!(sys.matrix().to_dense(), base);
         assert!(std::ptr::eq(sys.preconditioner(), sys.matrix()));
     }
