@@ -89,6 +89,46 @@ fn cusick_drape_coefficient_is_resolution_independent() {
     assert!((dcs[0] - dcs[1]).abs() < 0.03, "{dcs:?}");
 }
 
+/// A coarse disc (edge 2.5 cm: rings at 7.5 and 10 cm, none on the rim at 9 cm) rests on the
+/// support's rim through the repulsion of the rim's sharp edges and vertices (docs/MATH.md §24),
+/// not through the fail-safe: after 1.5 s every cloth edge crossing the rim's cylinder crosses
+/// it at nearly the thickness above the rim (the fail-safe alone lets the cloth come to a
+/// thousandth of it), no vertex is below the rim inside it, and the state has no intersection.
+#[test]
+fn a_coarse_disc_rests_on_the_rim_at_the_thickness() {
+    let density = drapery::textile::fabrics::fabric("cotton").unwrap().density;
+    let text = cusick_scene(0.025, density, "material = \"cotton\"")
+        .replace("duration = 3.0", "duration = 1.5");
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/cusick.toml");
+    let scene = Scene::from_str(&text, &path).unwrap();
+    let eta = scene.collision.unwrap().thickness;
+    let mut sim = scene.start().unwrap();
+    for _ in 0..scene.step_count() {
+        sim.step(scene.step_size()).unwrap();
+    }
+    let x = sim.positions();
+    let radial = |p: Vec3| (p.x * p.x + p.z * p.z).sqrt();
+    let mut crossings = 0;
+    let mut lowest = f64::INFINITY;
+    for e in scene.cloths[0].mesh.edges() {
+        let (p, q) = (x[e[0] as usize], x[e[1] as usize]);
+        let (rp, rq) = (radial(p), radial(q));
+        if (rp - RS) * (rq - RS) < 0.0 {
+            let c = p.lerp(q, (RS - rp) / (rq - rp));
+            if c.y > -0.005 {
+                crossings += 1;
+                lowest = lowest.min(c.y);
+            }
+        }
+    }
+    assert!(crossings > 20, "{crossings} edges cross the rim");
+    assert!(lowest > 0.5 * eta, "an edge crosses the rim {lowest} m above it");
+    for p in x {
+        assert!(!(radial(*p) < RS && p.y < 0.0), "a vertex sank into the support: {p}");
+    }
+    assert_eq!(sim.intersections(), (0, 0));
+}
+
 const G: f64 = 9.80665;
 
 /// Checks that coefficients `(name, bending length, DC)` fall in (0, 1) and are ordered like the
