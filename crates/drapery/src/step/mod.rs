@@ -276,6 +276,7 @@ impl Simulation {
                     &pose.pinned,
                     c,
                     repulsions,
+                    contacts.obstacle_repulsions.as_ref(),
                     &held,
                     &impulse,
                     &start.x0,
