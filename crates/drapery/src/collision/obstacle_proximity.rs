@@ -69,10 +69,6 @@ pub struct ObstacleProximity {
     pub normal: Vec3,
     /// Index of the obstacle.
     pub obstacle: u32,
-    /// Velocity of the collider point over the step (its displacement over `h`).
-    pub velocity: Vec3,
-    /// Coulomb coefficient of the pair (the obstacle's).
-    pub friction: f64,
 }
 
 impl ObstacleProximity {
@@ -138,39 +134,16 @@ pub fn sharp_edges(x: &[Vec3], triangles: &[[u32; 3]], angle: f64) -> Vec<[u32; 
         .collect()
 }
 
-/// The obstacle a pair belongs to.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Owner {
-    /// Its index.
-    pub index: u32,
-    /// Its Coulomb coefficient.
-    pub friction: f64,
-    /// The step, s (the collider points' velocities are their displacements over it).
-    pub h: f64,
-}
-
-/// The cloth–collider pairs of one obstacle (`owner`, features `f`) closer than `margin` at
-/// the cloth positions `x` (see the module docs).
+/// The cloth–collider pairs of one obstacle (index `obstacle`, features `f`) closer than
+/// `margin` at the cloth positions `x` (see the module docs).
 pub fn obstacle_proximities(
     x: &[Vec3],
     triangles: &[[u32; 3]],
     edges: &[[u32; 2]],
     f: &SharpFeatures,
-    owner: Owner,
+    obstacle: u32,
     margin: f64,
 ) -> Vec<ObstacleProximity> {
-    let pair =
-        |kind, particles, weights, point: Vec3, start: Vec3, dist, normal| ObstacleProximity {
-            kind,
-            particles,
-            weights,
-            point,
-            dist,
-            normal,
-            obstacle: owner.index,
-            velocity: (point - start) / owner.h,
-            friction: owner.friction,
-        };
     if f.edges.is_empty() {
         return Vec::new();
     }
@@ -197,15 +170,15 @@ pub fn obstacle_proximities(
         let interior = r.s > 0.0 && r.s < 1.0 && r.t > 0.0 && r.t < 1.0;
         (r.dist < margin && interior).then(|| {
             let fallback = unit((p1 - p0).cross(q1 - q0), Vec3::Y);
-            pair(
-                ObstacleStencilKind::EdgeEdge,
-                [a, b, a],
-                [1.0 - r.s, r.s, 0.0],
-                f.x1[c0 as usize].lerp(f.x1[c1 as usize], r.t),
-                r.q,
-                r.dist,
-                unit(r.p - r.q, fallback),
-            )
+            ObstacleProximity {
+                kind: ObstacleStencilKind::EdgeEdge,
+                particles: [a, b, a],
+                weights: [1.0 - r.s, r.s, 0.0],
+                point: f.x1[c0 as usize].lerp(f.x1[c1 as usize], r.t),
+                dist: r.dist,
+                normal: unit(r.p - r.q, fallback),
+                obstacle,
+            }
         })
     });
     let mut out: Vec<ObstacleProximity> = ee.collect();
@@ -249,15 +222,15 @@ pub fn obstacle_proximities(
             } else {
                 fallback
             };
-            out.push(pair(
-                ObstacleStencilKind::VertexTriangle,
-                tri,
-                w,
-                f.x1[v as usize],
-                q0,
+            out.push(ObstacleProximity {
+                kind: ObstacleStencilKind::VertexTriangle,
+                particles: tri,
+                weights: w,
+                point: f.x1[v as usize],
                 dist,
-                unit(p - q0, fallback),
-            ));
+                normal: unit(p - q0, fallback),
+                obstacle,
+            });
         } else if zeros == 1 {
             let z = (0..3).find(|&i| w[i] <= 0.0).unwrap_or(0);
             let (i, j) = (tri[(z + 1) % 3], tri[(z + 2) % 3]);
@@ -283,15 +256,15 @@ pub fn obstacle_proximities(
         } else {
             fallback
         };
-        out.push(pair(
-            ObstacleStencilKind::VertexEdge,
-            [a, b, a],
-            [1.0 - r.t, r.t, 0.0],
-            f.x1[v as usize],
-            q0,
-            r.dist,
-            unit(r.q - q0, fallback),
-        ));
+        out.push(ObstacleProximity {
+            kind: ObstacleStencilKind::VertexEdge,
+            particles: [a, b, a],
+            weights: [1.0 - r.t, r.t, 0.0],
+            point: f.x1[v as usize],
+            dist: r.dist,
+            normal: unit(r.q - q0, fallback),
+            obstacle,
+        });
     }
     out
 }
@@ -347,14 +320,6 @@ mod tests {
         )
     }
 
-    fn owner(index: u32) -> Owner {
-        Owner {
-            index,
-            friction: 0.3,
-            h: 0.01,
-        }
-    }
-
     fn features(segments: usize) -> SharpFeatures {
         let (x, tris) = cylinder(segments);
         SharpFeatures::new(x.clone(), x, &tris)
@@ -365,7 +330,7 @@ mod tests {
         let f = features(128);
         let eta = 0.002;
         let (x, tris, edges) = strip(0.5 * eta);
-        let near = obstacle_proximities(&x, &tris, &edges, &f, owner(3), eta);
+        let near = obstacle_proximities(&x, &tris, &edges, &f, 3, eta);
         // the three edges crossing the rim (0-1, 1-2, 2-3) each meet one rim edge
         let ee: Vec<&ObstacleProximity> = near
             .iter()
@@ -386,7 +351,7 @@ mod tests {
             assert!((p.normal - Vec3::Z).length() < 1e-12, "{p:?}");
             assert!((p.dist - 0.5 * eta).abs() < 1e-15, "{p:?}");
             assert!((w[..3].iter().sum::<f64>() - 1.0).abs() < 1e-15);
-            assert_eq!((p.obstacle, p.friction, p.velocity), (3, 0.3, Vec3::ZERO));
+            assert_eq!(p.obstacle, 3);
         }
         // the rim vertices under the strip's interior: vertex–triangle pairs
         let vt = near
@@ -397,14 +362,14 @@ mod tests {
         assert_eq!(near.len(), 5, "{near:?}");
         // out of reach: nothing
         let (x, tris, edges) = strip(1.5 * eta);
-        assert!(obstacle_proximities(&x, &tris, &edges, &f, owner(0), eta).is_empty());
+        assert!(obstacle_proximities(&x, &tris, &edges, &f, 0, eta).is_empty());
         // a strip wholly inside the rim, on the flat top: no sharp feature near
         let inside: Vec<Vec3> = strip(0.5 * eta)
             .0
             .iter()
             .map(|p| *p - Vec3::X * 0.05)
             .collect();
-        assert!(obstacle_proximities(&inside, &tris, &edges, &f, owner(0), eta).is_empty());
+        assert!(obstacle_proximities(&inside, &tris, &edges, &f, 0, eta).is_empty());
     }
 
     #[test]
@@ -420,7 +385,7 @@ mod tests {
             Vec3::new(0.10, 0.01, 0.001),
         ];
         let (tris, edges) = (strip(0.0).1, strip(0.0).2);
-        let near = obstacle_proximities(&x, &tris, &edges, &f, owner(0), eta);
+        let near = obstacle_proximities(&x, &tris, &edges, &f, 0, eta);
         let at_vertex: Vec<&ObstacleProximity> = near
             .iter()
             .filter(|p| (p.point - Vec3::new(0.09, 0.0, 0.0)).length() < 1e-12)
@@ -430,7 +395,7 @@ mod tests {
         assert!((at_vertex[0].dist - 0.001).abs() < 1e-12);
         // moved so that cloth vertex 0 sits over the rim vertex: a particle contact's, no pair
         let x: Vec<Vec3> = x.iter().map(|p| *p + Vec3::new(0.01, 0.01, 0.0)).collect();
-        let near = obstacle_proximities(&x, &tris, &edges, &f, owner(0), eta);
+        let near = obstacle_proximities(&x, &tris, &edges, &f, 0, eta);
         assert!(
             near.iter()
                 .all(|p| (p.point - Vec3::new(0.09, 0.0, 0.0)).length() > 1e-12),

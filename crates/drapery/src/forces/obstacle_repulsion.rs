@@ -7,8 +7,7 @@
 //! [`crate::collision::repulsion::repulsion`] with `q` as a fourth point of weight `-1`. Only the
 //! cloth particles get forces and Jacobian blocks (`wᵢ wⱼ J` among them); the collider takes the
 //! reaction. As for cloth–cloth repulsion the tangential term is left out of the matrix, so
-//! `-K` stays positive semi-definite, and the force is exact. No damping; Coulomb friction acts
-//! after the solve ([`crate::collision::friction::apply_obstacle_stencil_friction`]).
+//! `-K` stays positive semi-definite, and the force is exact. No damping and no friction.
 
 use super::stencil::{Full, Gather, Local, StencilForce};
 use super::{Linearization, State};
@@ -146,8 +145,6 @@ mod tests {
                 dist: d[k] * PENALTY.thickness,
                 normal: n,
                 obstacle: 0,
-                velocity: Vec3::ZERO,
-                friction: 0.0,
             });
         }
         Some(out)

@@ -14,7 +14,7 @@
 use super::guard::Start;
 use super::pose::Pose;
 use crate::collision::broad_phase::candidates;
-use crate::collision::obstacle_proximity::{Owner, SharpFeatures, obstacle_proximities};
+use crate::collision::obstacle_proximity::{SharpFeatures, obstacle_proximities};
 use crate::collision::proximity::proximities;
 use crate::collision::repulsion::Penalty;
 use crate::constraints::obstacle::{self, ObstacleContact};
@@ -89,14 +89,9 @@ pub(crate) fn contacts(
             continue;
         };
         let features = SharpFeatures::new(v0, v1, tris);
-        let owner = Owner {
-            index: k as u32,
-            friction: o.friction,
-            h: pose.h,
-        };
         let margin = 2.0 * c.thickness;
         near.extend(obstacle_proximities(
-            x0, triangles, edges, &features, owner, margin,
+            x0, triangles, edges, &features, k as u32, margin,
         ));
     }
     // (the obstacle is particle `n` for `exempt`, as in the fail-safe's pairs)

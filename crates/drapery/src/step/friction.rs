@@ -1,17 +1,14 @@
 //! The friction stage: Coulomb friction on the solved velocities, cloth–cloth contacts first,
-//! then cloth–collider stencils, then obstacle contacts ([`crate::collision::friction`]), and
-//! the end-of-step positions.
+//! then obstacle contacts ([`crate::collision::friction`]), and the end-of-step positions.
 //!
 //! A held obstacle contact's solved normal displacement (what brings the particle to the
 //! thickness) is kept as a position correction while its normal velocity is set to the
 //! surface's: the particle ends the step at rest on the surface, not flying off it.
 
-use crate::collision::friction::{
-    apply_contact_friction, apply_obstacle_friction, apply_obstacle_stencil_friction,
-};
+use crate::collision::friction::{apply_contact_friction, apply_obstacle_friction};
 use crate::collision::settings::CollisionSettings;
 use crate::constraints::obstacle::ObstacleContact;
-use crate::forces::{ObstacleRepulsions, Repulsions};
+use crate::forces::Repulsions;
 use crate::math::Vec3;
 use crate::model::Model;
 
@@ -22,7 +19,6 @@ pub(crate) fn run(
     pinned: &[bool],
     settings: &CollisionSettings,
     repulsions: Option<&Repulsions>,
-    obstacle_repulsions: Option<&ObstacleRepulsions>,
     contacts: &[ObstacleContact],
     impulse: &[f64],
     x0: &[Vec3],
@@ -42,10 +38,6 @@ pub(crate) fn run(
             settings.friction,
             h,
         );
-    }
-    if let Some(r) = obstacle_repulsions {
-        let (mass, stencils) = (&model.mass, &r.stencils);
-        apply_obstacle_stencil_friction(v, x, mass, pinned, stencils, &r.penalty, h);
     }
     apply_obstacle_friction(v, &model.mass, contacts, impulse);
     for i in 0..x.len() {
@@ -86,7 +78,6 @@ mod tests {
             &m,
             &m.pinned,
             &settings,
-            None,
             None,
             &[ct],
             &[1.0],

@@ -276,7 +276,6 @@ impl Simulation {
                     &pose.pinned,
                     c,
                     repulsions,
-                    contacts.obstacle_repulsions.as_ref(),
                     &held,
                     &impulse,
                     &start.x0,

@@ -122,15 +122,9 @@ fn a_coarse_disc_rests_on_the_rim_at_the_thickness() {
         }
     }
     assert!(crossings > 20, "{crossings} edges cross the rim");
-    assert!(
-        lowest > 0.5 * eta,
-        "an edge crosses the rim {lowest} m above it"
-    );
+    assert!(lowest > 0.5 * eta, "an edge crosses the rim {lowest} m above it");
     for p in x {
-        assert!(
-            !(radial(*p) < RS && p.y < 0.0),
-            "a vertex sank into the support: {p}"
-        );
+        assert!(!(radial(*p) < RS && p.y < 0.0), "a vertex sank into the support: {p}");
     }
     assert_eq!(sim.intersections(), (0, 0));
 }
