@@ -4,8 +4,10 @@
 //! `drapery::textile::drape::drape_coefficient` measures its shadow:
 //!
 //! * resolution independence: the coefficient at edge lengths 1 cm and 5 mm agrees within
-//!   0.03 (at 2 cm, 3 rings across the overhang, it does not: 0.39 against 0.63, not asserted;
+//!   0.03 (at 2 cm, 3 rings across the overhang and none on the rim, it does not: 0.625 against
+//!   0.670 with the rim's repulsion, docs/MATH.md §24, 0.39 against 0.63 before; not asserted;
 //!   docs/MATERIALS.md §4.4);
+//! * a coarse disc with no ring on the rim rests on it at the thickness (§24);
 //! * presets: every coefficient lies in (0, 1) and they are ordered like the bending length
 //!   `(B/(ρ g))^{1/3}` (stiffer per weight drapes less), up to the resolution error.
 
