@@ -123,6 +123,7 @@ fn a_coarse_disc_rests_on_the_rim_at_the_thickness() {
             }
         }
     }
+    eprintln!("{crossings} edges cross the rim, the lowest {lowest:.3e} m above it (η = {eta})");
     assert!(crossings > 20, "{crossings} edges cross the rim");
     assert!(lowest > 0.5 * eta, "an edge crosses the rim {lowest} m above it");
     for p in x {
