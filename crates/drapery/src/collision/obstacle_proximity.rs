@@ -69,6 +69,11 @@ pub struct ObstacleProximity {
     pub normal: Vec3,
     /// Index of the obstacle.
     pub obstacle: u32,
+    /// Velocity of the collider point over the step (its displacement over `h`).
+    pub velocity: Vec3,
+    /// Coefficient `c` (N·s/m) of the tangential damping that stands in for friction (set by
+    /// the caller; 0 here).
+    pub damping: f64,
 }
 
 impl ObstacleProximity {
@@ -135,15 +140,28 @@ pub fn sharp_edges(x: &[Vec3], triangles: &[[u32; 3]], angle: f64) -> Vec<[u32; 
 }
 
 /// The cloth–collider pairs of one obstacle (index `obstacle`, features `f`) closer than
-/// `margin` at the cloth positions `x` (see the module docs).
+/// `margin` at the cloth positions `x` (see the module docs); `h` is the step (the collider
+/// points' velocities are their displacements over it).
 pub fn obstacle_proximities(
     x: &[Vec3],
     triangles: &[[u32; 3]],
     edges: &[[u32; 2]],
     f: &SharpFeatures,
-    obstacle: u32,
+    (obstacle, h): (u32, f64),
     margin: f64,
 ) -> Vec<ObstacleProximity> {
+    let pair =
+        |kind, particles, weights, point: Vec3, start: Vec3, dist, normal| ObstacleProximity {
+            kind,
+            particles,
+            weights,
+            point,
+            dist,
+            normal,
+            obstacle,
+            velocity: (point - start) / h,
+            damping: 0.0,
+        };
     if f.edges.is_empty() {
         return Vec::new();
     }
@@ -170,15 +188,15 @@ pub fn obstacle_proximities(
         let interior = r.s > 0.0 && r.s < 1.0 && r.t > 0.0 && r.t < 1.0;
         (r.dist < margin && interior).then(|| {
             let fallback = unit((p1 - p0).cross(q1 - q0), Vec3::Y);
-            ObstacleProximity {
-                kind: ObstacleStencilKind::EdgeEdge,
-                particles: [a, b, a],
-                weights: [1.0 - r.s, r.s, 0.0],
-                point: f.x1[c0 as usize].lerp(f.x1[c1 as usize], r.t),
-                dist: r.dist,
-                normal: unit(r.p - r.q, fallback),
-                obstacle,
-            }
+            pair(
+                ObstacleStencilKind::EdgeEdge,
+                [a, b, a],
+                [1.0 - r.s, r.s, 0.0],
+                f.x1[c0 as usize].lerp(f.x1[c1 as usize], r.t),
+                r.q,
+                r.dist,
+                unit(r.p - r.q, fallback),
+            )
         })
     });
     let mut out: Vec<ObstacleProximity> = ee.collect();
@@ -222,15 +240,15 @@ pub fn obstacle_proximities(
             } else {
                 fallback
             };
-            out.push(ObstacleProximity {
-                kind: ObstacleStencilKind::VertexTriangle,
-                particles: tri,
-                weights: w,
-                point: f.x1[v as usize],
+            out.push(pair(
+                ObstacleStencilKind::VertexTriangle,
+                tri,
+                w,
+                f.x1[v as usize],
+                q0,
                 dist,
-                normal: unit(p - q0, fallback),
-                obstacle,
-            });
+                unit(p - q0, fallback),
+            ));
         } else if zeros == 1 {
             let z = (0..3).find(|&i| w[i] <= 0.0).unwrap_or(0);
             let (i, j) = (tri[(z + 1) % 3], tri[(z + 2) % 3]);
@@ -256,15 +274,15 @@ pub fn obstacle_proximities(
         } else {
             fallback
         };
-        out.push(ObstacleProximity {
-            kind: ObstacleStencilKind::VertexEdge,
-            particles: [a, b, a],
-            weights: [1.0 - r.t, r.t, 0.0],
-            point: f.x1[v as usize],
-            dist: r.dist,
-            normal: unit(r.q - q0, fallback),
-            obstacle,
-        });
+        out.push(pair(
+            ObstacleStencilKind::VertexEdge,
+            [a, b, a],
+            [1.0 - r.t, r.t, 0.0],
+            f.x1[v as usize],
+            q0,
+            r.dist,
+            unit(r.q - q0, fallback),
+        ));
     }
     out
 }
@@ -330,7 +348,7 @@ mod tests {
         let f = features(128);
         let eta = 0.002;
         let (x, tris, edges) = strip(0.5 * eta);
-        let near = obstacle_proximities(&x, &tris, &edges, &f, 3, eta);
+        let near = obstacle_proximities(&x, &tris, &edges, &f, (3, 0.01), eta);
         // the three edges crossing the rim (0-1, 1-2, 2-3) each meet one rim edge
         let ee: Vec<&ObstacleProximity> = near
             .iter()
@@ -351,7 +369,7 @@ mod tests {
             assert!((p.normal - Vec3::Z).length() < 1e-12, "{p:?}");
             assert!((p.dist - 0.5 * eta).abs() < 1e-15, "{p:?}");
             assert!((w[..3].iter().sum::<f64>() - 1.0).abs() < 1e-15);
-            assert_eq!(p.obstacle, 3);
+            assert_eq!((p.obstacle, p.velocity), (3, Vec3::ZERO));
         }
         // the rim vertices under the strip's interior: vertex–triangle pairs
         let vt = near
@@ -362,14 +380,14 @@ mod tests {
         assert_eq!(near.len(), 5, "{near:?}");
         // out of reach: nothing
         let (x, tris, edges) = strip(1.5 * eta);
-        assert!(obstacle_proximities(&x, &tris, &edges, &f, 0, eta).is_empty());
+        assert!(obstacle_proximities(&x, &tris, &edges, &f, (0, 0.01), eta).is_empty());
         // a strip wholly inside the rim, on the flat top: no sharp feature near
         let inside: Vec<Vec3> = strip(0.5 * eta)
             .0
             .iter()
             .map(|p| *p - Vec3::X * 0.05)
             .collect();
-        assert!(obstacle_proximities(&inside, &tris, &edges, &f, 0, eta).is_empty());
+        assert!(obstacle_proximities(&inside, &tris, &edges, &f, (0, 0.01), eta).is_empty());
     }
 
     #[test]
@@ -385,7 +403,7 @@ mod tests {
             Vec3::new(0.10, 0.01, 0.001),
         ];
         let (tris, edges) = (strip(0.0).1, strip(0.0).2);
-        let near = obstacle_proximities(&x, &tris, &edges, &f, 0, eta);
+        let near = obstacle_proximities(&x, &tris, &edges, &f, (0, 0.01), eta);
         let at_vertex: Vec<&ObstacleProximity> = near
             .iter()
             .filter(|p| (p.point - Vec3::new(0.09, 0.0, 0.0)).length() < 1e-12)
@@ -395,7 +413,7 @@ mod tests {
         assert!((at_vertex[0].dist - 0.001).abs() < 1e-12);
         // moved so that cloth vertex 0 sits over the rim vertex: a particle contact's, no pair
         let x: Vec<Vec3> = x.iter().map(|p| *p + Vec3::new(0.01, 0.01, 0.0)).collect();
-        let near = obstacle_proximities(&x, &tris, &edges, &f, 0, eta);
+        let near = obstacle_proximities(&x, &tris, &edges, &f, (0, 0.01), eta);
         assert!(
             near.iter()
                 .all(|p| (p.point - Vec3::new(0.09, 0.0, 0.0)).length() > 1e-12),

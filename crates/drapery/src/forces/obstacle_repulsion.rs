@@ -7,7 +7,12 @@
 //! [`crate::collision::repulsion::repulsion`] with `q` as a fourth point of weight `-1`. Only the
 //! cloth particles get forces and Jacobian blocks (`wᵢ wⱼ J` among them); the collider takes the
 //! reaction. As for cloth–cloth repulsion the tangential term is left out of the matrix, so
-//! `-K` stays positive semi-definite, and the force is exact. No damping and no friction.
+//! `-K` stays positive semi-definite, and the force is exact.
+//!
+//! Friction is a tangential damping in the solve: `fᵢ = -c wᵢ (I - n nᵀ)(Σ wⱼ vⱼ - v_q)` with the
+//! stencil's coefficient `c` and its normal at the start of the step, linear in `v`, its
+//! `∂f/∂v = -c (w wᵀ) ⊗ (I - n nᵀ)` symmetric negative semi-definite (in the matrix as it is),
+//! its dissipation potential `½ c |(I - n nᵀ)(Σ wⱼ vⱼ - v_q)|²`.
 
 use super::stencil::{Full, Gather, Local, StencilForce};
 use super::{Linearization, State};
@@ -48,14 +53,30 @@ impl ObstacleRepulsions {
     }
 }
 
-/// The cloth particles' forces of a penalty.
-fn cloth_forces(r: &Repulsion) -> [Vec3; 3] {
-    [r.forces[0], r.forces[1], r.forces[2]]
+/// The tangential projector `I - n nᵀ` of stencil `st` (its normal at the start of the step).
+fn tangential(st: &ObstacleProximity) -> Mat3 {
+    Mat3::IDENTITY - crate::math::outer(st.normal, st.normal)
 }
 
-/// The blocks among the cloth particles, times `a`.
-fn cloth_blocks(r: &Repulsion, a: f64) -> [[Mat3; 3]; 3] {
-    std::array::from_fn(|i| std::array::from_fn(|j| a * r.jac[i][j]))
+/// The sliding velocity `(I - n nᵀ)(Σ wᵢ vᵢ - v_q)` of stencil `st`.
+fn sliding(st: &ObstacleProximity, v: &[Vec3]) -> Vec3 {
+    let u: Vec3 = (0..3)
+        .map(|a| v[st.particles[a] as usize] * st.weights[a])
+        .sum();
+    tangential(st) * (u - st.velocity)
+}
+
+/// The cloth particles' forces: the penalty's and the damping `-c wᵢ (I - n nᵀ) u`.
+fn cloth_forces(r: &Repulsion, st: &ObstacleProximity, v: &[Vec3]) -> [Vec3; 3] {
+    let damp = sliding(st, v) * (-st.damping);
+    std::array::from_fn(|i| r.forces[i] + damp * st.weights[i])
+}
+
+/// The blocks among the cloth particles of `a ∂f/∂x + b ∂f/∂v`.
+fn cloth_blocks(r: &Repulsion, st: &ObstacleProximity, a: f64, b: f64) -> [[Mat3; 3]; 3] {
+    let d = tangential(st) * (-b * st.damping);
+    let w = st.weights;
+    std::array::from_fn(|i| std::array::from_fn(|j| a * r.jac[i][j] + d * (w[i] * w[j])))
 }
 
 impl StencilForce for ObstacleRepulsions {
@@ -73,24 +94,26 @@ impl StencilForce for ObstacleRepulsions {
     fn local_energy(&self, s: usize, _t: f64, x: &[Vec3]) -> f64 {
         self.eval(s, x, false).energy
     }
+    fn local_dissipation(&self, s: usize, at: &State) -> f64 {
+        let st = &self.stencils[s];
+        0.5 * st.damping * sliding(st, at.v).length_squared()
+    }
     fn local_force(&self, s: usize, at: &State) -> [Vec3; 3] {
-        cloth_forces(&self.eval(s, at.x, false))
+        cloth_forces(&self.eval(s, at.x, false), &self.stencils[s], at.v)
     }
-    fn has_jacobian(&self, a: f64, _b: f64) -> bool {
-        a != 0.0
-    }
-    fn local_jacobian(&self, s: usize, at: &State, a: f64, _b: f64) -> [[Mat3; 3]; 3] {
-        cloth_blocks(&self.eval(s, at.x, false), a)
+    fn local_jacobian(&self, s: usize, at: &State, a: f64, b: f64) -> [[Mat3; 3]; 3] {
+        cloth_blocks(&self.eval(s, at.x, false), &self.stencils[s], a, b)
     }
     /// One penalty evaluation per stencil for the force, the product and the matrix.
     fn local(&self, s: usize, at: &Linearization, _product: bool, _matrix: bool) -> Local<Full<3>> {
         use super::stencil::Shape;
-        let r = self.eval(s, at.x, false);
-        let product = cloth_blocks(&r, at.product.0);
+        let (r, st) = (self.eval(s, at.x, false), &self.stencils[s]);
+        let ((am, bm), (ap, bp)) = (at.matrix, at.product);
+        let product = cloth_blocks(&r, st, ap, bp);
         Local {
-            force: cloth_forces(&r),
-            product: Full::<3>::product(&product, self.stencils[s].particles, at.w),
-            matrix: cloth_blocks(&r, at.matrix.0),
+            force: cloth_forces(&r, st, at.v),
+            product: Full::<3>::product(&product, st.particles, at.w),
+            matrix: cloth_blocks(&r, st, am, bm),
         }
     }
 }
@@ -145,6 +168,8 @@ mod tests {
                 dist: d[k] * PENALTY.thickness,
                 normal: n,
                 obstacle: 0,
+                velocity: Vec3::ZERO,
+                damping: 0.0,
             });
         }
         Some(out)
@@ -198,6 +223,55 @@ mod tests {
             let q: f64 = (0..12).map(|r| (0..12).map(|c| w[r] * k[r][c] * w[c]).sum::<f64>()).sum();
             prop_assert!(q <= 1e-9);
             prop_assert!(check_product(&rep, &x, &x, 1.0, 0.0, &x) < 1e-12);
+        }
+
+        /// The tangential damping: `∂f/∂v` in the matrix equals central differences of the force
+        /// in `v` (exact: the force is linear in `v`), is symmetric negative semi-definite, has
+        /// no normal part, and the force is minus the gradient of the dissipation potential.
+        #[test]
+        fn damping_jacobian_matches_differences_and_dissipates(
+            x in prop::collection::vec(vec3(0.02), 4),
+            v in prop::collection::vec(vec3(1.0), 4),
+            bary in prop::array::uniform3(0.05..1.0f64),
+            s in 0.1..0.9f64,
+            dirs in prop::array::uniform2(vec3(1.0)),
+            c in 0.1..10.0f64,
+            vq in vec3(1.0),
+        ) {
+            let Some(mut st) = stencils(&x, bary, s, dirs, [1.5, 1.5]) else { return Ok(()) };
+            for p in &mut st { p.damping = c; p.velocity = vq; }
+            let rep = ObstacleRepulsions::new(st.clone(), PENALTY);
+            let d = assembled(&rep, &x, &v, 0.0, 1.0);
+            let fd = fd_jacobian_step(&rep, &x, &v, true, 1.0);
+            prop_assert!(rel_diff(&d, &fd) < 1e-9, "{}", rel_diff(&d, &fd));
+            let w: Vec<f64> = (0..12).map(|i| ((i * 7919) % 13) as f64 - 6.0).collect();
+            let q: f64 = (0..12).map(|r| (0..12).map(|k| w[r] * d[r][k] * w[k]).sum::<f64>()).sum();
+            prop_assert!(q <= 1e-9);
+            for r in 0..12 { for k in 0..12 { prop_assert!((d[r][k] - d[k][r]).abs() <= 1e-12 * c); } }
+            // -∂Ψ/∂v = f (the penalty is inactive at 1.5 η: the force is the damping alone)
+            let mut f = vec![Vec3::ZERO; 4];
+            rep.add_force(&at(&x, &v), &mut f);
+            let mut vp = v.clone();
+            for i in 0..4 {
+                for k in 0..3 {
+                    let e = 1e-6;
+                    vp[i][k] = v[i][k] + e;
+                    let up = rep.dissipation(&at(&x, &vp));
+                    vp[i][k] = v[i][k] - e;
+                    let dn = rep.dissipation(&at(&x, &vp));
+                    vp[i][k] = v[i][k];
+                    let g = -(up - dn) / (2.0 * e);
+                    prop_assert!((g - f[i][k]).abs() <= 1e-6 * (1.0 + f[i][k].abs()), "{g} vs {}", f[i][k]);
+                }
+            }
+            // no normal force: each stencil's total damping force is tangential
+            for one in &st {
+                let rep = ObstacleRepulsions::new(vec![*one], PENALTY);
+                let mut f = vec![Vec3::ZERO; 4];
+                rep.add_force(&at(&x, &v), &mut f);
+                let total: Vec3 = f.iter().sum();
+                prop_assert!(total.dot(one.normal).abs() <= 1e-9 * (1.0 + total.length()));
+            }
         }
 
         /// The cloth's forces add up to `k (η - d) n`, pushing it away from the collider point

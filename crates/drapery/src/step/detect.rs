@@ -21,6 +21,11 @@ use crate::constraints::obstacle::{self, ObstacleContact};
 use crate::forces::{Force, ObstacleRepulsions, Repulsions};
 use crate::model::Model;
 
+/// The sliding speed (m/s) at which the tangential damping of a cloth–collider pair reaches
+/// the Coulomb force `μ k (η − d)` of its normal force at the start of the step
+/// (docs/MATH.md §24).
+const SLIP: f64 = 1e-3;
+
 /// The contacts of one step.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Contacts {
@@ -90,9 +95,13 @@ pub(crate) fn contacts(
         };
         let features = SharpFeatures::new(v0, v1, tris);
         let margin = 2.0 * c.thickness;
-        near.extend(obstacle_proximities(
-            x0, triangles, edges, &features, k as u32, margin,
-        ));
+        let owner = (k as u32, pose.h);
+        let mut pairs = obstacle_proximities(x0, triangles, edges, &features, owner, margin);
+        // friction, viscous: the Coulomb force of the starting normal force at SLIP
+        for p in &mut pairs {
+            p.damping = o.friction * c.stiffness * (c.thickness - p.dist).max(0.0) / SLIP;
+        }
+        near.extend(pairs);
     }
     // (the obstacle is particle `n` for `exempt`, as in the fail-safe's pairs)
     near.retain(|s| {
