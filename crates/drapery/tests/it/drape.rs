@@ -3,10 +3,10 @@
 //! `examples/cusick_support.obj`, a flat top with a sharp rim), and
 //! `drapery::textile::drape::drape_coefficient` measures its shadow:
 //!
-//! * resolution independence: the coefficient at edge lengths 1 cm and 5 mm agrees within
-//!   0.03 (at 2 cm, 3 rings across the overhang and none on the rim, it does not: 0.625 against
-//!   0.670 with the rim's repulsion, docs/MATH.md §24, 0.39 against 0.63 before; not asserted;
-//!   docs/MATERIALS.md §4.4);
+//! * resolution independence: the coefficient at edge lengths 2 cm, 1 cm and 5 mm agrees
+//!   within 0.03, though only 1 cm and 5 mm have a ring of vertices on the rim (the rim's
+//!   repulsion, docs/MATH.md §24, supports the 2 cm disc between its rings; before it 2 cm gave
+//!   0.39 against 0.63; docs/MATERIALS.md §4.4);
 //! * a coarse disc with no ring on the rim rests on it at the thickness (§24);
 //! * presets: every coefficient lies in (0, 1) and they are ordered like the bending length
 //!   `(B/(ρ g))^{1/3}` (stiffer per weight drapes less), up to the resolution error.
@@ -77,7 +77,7 @@ fn drape(text: &str) -> (f64, f64) {
 fn cusick_drape_coefficient_is_resolution_independent() {
     let density = drapery::textile::fabrics::fabric("cotton").unwrap().density;
     let mut dcs = Vec::new();
-    for h in [0.01, 0.005] {
+    for h in [0.02, 0.01, 0.005] {
         let t = Instant::now();
         let (dc, speed) = drape(&cusick_scene(h, density, "material = \"cotton\""));
         eprintln!(
@@ -88,7 +88,11 @@ fn cusick_drape_coefficient_is_resolution_independent() {
         assert!(dc > 0.0 && dc < 1.0, "h = {h}: DC {dc}");
         dcs.push(dc);
     }
-    assert!((dcs[0] - dcs[1]).abs() < 0.03, "{dcs:?}");
+    // every pair within 0.03: the 2 cm disc has no ring on the rim, the others have one
+    let (lo, hi) = dcs
+        .iter()
+        .fold((1.0f64, 0.0f64), |(l, h), d| (l.min(*d), h.max(*d)));
+    assert!(hi - lo < 0.03, "{dcs:?}");
 }
 
 /// A coarse disc (edge 2.5 cm: rings at 7.5 and 10 cm, none on the rim at 9 cm) rests on the
@@ -125,9 +129,15 @@ fn a_coarse_disc_rests_on_the_rim_at_the_thickness() {
     }
     eprintln!("{crossings} edges cross the rim, the lowest {lowest:.3e} m above it (η = {eta})");
     assert!(crossings > 20, "{crossings} edges cross the rim");
-    assert!(lowest > 0.5 * eta, "an edge crosses the rim {lowest} m above it");
+    assert!(
+        lowest > 0.5 * eta,
+        "an edge crosses the rim {lowest} m above it"
+    );
     for p in x {
-        assert!(!(radial(*p) < RS && p.y < 0.0), "a vertex sank into the support: {p}");
+        assert!(
+            !(radial(*p) < RS && p.y < 0.0),
+            "a vertex sank into the support: {p}"
+        );
     }
     assert_eq!(sim.intersections(), (0, 0));
 }
