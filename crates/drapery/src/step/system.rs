@@ -7,9 +7,11 @@
 //! * With contacts they are assembled into the **base matrix** (the fixed pattern of the model's
 //!   forces), copied into the enlarged system matrix, and the contact blocks added there; the
 //!   **preconditioner matrix** is the base matrix plus the contacts' diagonal blocks (their
-//!   coupling left out), so the multigrid keeps one structure for the whole run. When the
-//!   contacts add no block to the base pattern (cloth–collider pairs, whose cloth particles
-//!   share a triangle or an edge) the preconditioner is the system matrix itself.
+//!   coupling left out), so the multigrid keeps one structure for the whole run.
+//! * Contacts that add no block to the base pattern (the cloth–collider pairs, whose cloth
+//!   particles share a triangle or an edge) are assembled with the model's forces, into the base
+//!   matrix, so the preconditioner gets their blocks, coupling and all; when all contacts are
+//!   such, the system matrix keeps the base pattern and is its own preconditioner.
 
 use crate::forces::{Force, Linearization};
 use crate::linalg::BlockMatrix;
@@ -30,6 +32,8 @@ pub(crate) struct System {
     matrix: BlockMatrix,
     /// Whether this step's contact pairs enlarge the system matrix's pattern.
     with_contacts: bool,
+    /// Per contact force of this step: whether all its pairs are in the base pattern.
+    inner: Vec<bool>,
 }
 
 impl System {
@@ -47,6 +51,7 @@ impl System {
             precond: matrix.clone(),
             matrix,
             with_contacts: false,
+            inner: Vec::new(),
         }
     }
 
@@ -55,13 +60,12 @@ impl System {
         &self.matrix
     }
 
-    /// What the preconditioner is built from: the system matrix itself without contacts (PCG
-    /// then multiplies by the multigrid's compact copy) and when the contacts add no block to
-    /// its pattern (the cloth–collider pairs of a cloth triangle or edge: their blocks, coupling
-    /// and all, are then what the multigrid smooths and coarsens), else the base plus the
-    /// contacts' diagonal blocks.
+    /// What the preconditioner is built from: the system matrix itself when no contact
+    /// enlarges its pattern (PCG then multiplies by the multigrid's compact copy), else the
+    /// base matrix (with the contacts inside its pattern) plus the other contacts' diagonal
+    /// blocks.
     pub fn preconditioner(&self) -> &BlockMatrix {
-        if !self.with_contacts || self.matrix.same_pattern(&self.base) {
+        if !self.with_contacts {
             &self.matrix
         } else {
             &self.precond
@@ -74,14 +78,24 @@ impl System {
     }
 
     /// Sets the system matrix's pattern for this step: the base pattern, or the base plus the
-    /// contact pairs of the `contacts` forces (then also where each base block goes in it).
+    /// contact pairs of the `contacts` forces that are not all in it (then also where each base
+    /// block goes in it).
     pub fn use_contacts(&mut self, contacts: &[&dyn Force]) {
         let n = self.base.n();
-        if !contacts.is_empty() {
-            let mut pairs = self.base_pairs.clone();
-            for r in contacts {
-                r.add_pattern(&mut pairs);
+        let mut pairs = self.base_pairs.clone();
+        self.inner.clear();
+        for r in contacts {
+            let mut own = Vec::new();
+            r.add_pattern(&mut own);
+            let inner = own
+                .iter()
+                .all(|&(i, j)| self.base.find(i as usize, j as usize).is_some());
+            self.inner.push(inner);
+            if !inner {
+                pairs.extend(own);
             }
+        }
+        if self.inner.contains(&false) {
             self.matrix = BlockMatrix::from_pairs(n, &pairs);
             let (base, merged) = (&self.base, &self.matrix);
             self.base_slots.clear();
@@ -105,10 +119,10 @@ impl System {
     }
 
     /// Assembles `A = M + a K + b D` at `(at.x, at.v)` with `(a, b) = at.matrix` (`-h²`, `-h`
-    /// in a step): the mass and the model's `forces`, then the `contacts` forces if any (see the
-    /// module docs for where each goes). With `vectors = (f, kw)`, also adds every force
-    /// (contacts last) to `f` and the products with `at.product` and `at.w` to `kw`, from the
-    /// same evaluation ([`Force::add_linearization`]).
+    /// in a step): the mass and the model's `forces`, then the `contacts` forces if any (those
+    /// of the last [`System::use_contacts`]; see the module docs for where each goes). With
+    /// `vectors = (f, kw)`, also adds every force (contacts last) to `f` and the products with
+    /// `at.product` and `at.w` to `kw`, from the same evaluation ([`Force::add_linearization`]).
     pub fn assemble(
         &mut self,
         mass: &[f64],
@@ -117,7 +131,9 @@ impl System {
         contacts: &[&dyn Force],
         mut vectors: Option<(&mut [Vec3], &mut [Vec3])>,
     ) {
-        let base = if !contacts.is_empty() {
+        debug_assert!(contacts.is_empty() || contacts.len() == self.inner.len());
+        let inner = |k: usize| self.inner[k];
+        let base = if self.with_contacts {
             &mut self.base
         } else {
             &mut self.matrix
@@ -130,15 +146,22 @@ impl System {
         for force in forces {
             add(force.as_ref(), base);
         }
-        if contacts.is_empty() {
+        for (k, c) in contacts.iter().enumerate() {
+            if inner(k) {
+                add(*c, base);
+            }
+        }
+        if !self.with_contacts {
             return;
         }
         self.matrix.clear();
         for (k, &slot) in self.base_slots.iter().enumerate() {
             self.matrix.values[slot as usize] = self.base.values[k];
         }
-        for c in contacts {
-            add(*c, &mut self.matrix);
+        for (k, c) in contacts.iter().enumerate() {
+            if !inner(k) {
+                add(*c, &mut self.matrix);
+            }
         }
         let p = &mut self.precond;
         p.values.copy_from_slice(&self.base.values);
@@ -176,7 +199,7 @@ mod tests {
     use super::*;
     use crate::collision::proximity::{Proximity, StencilKind};
     use crate::collision::repulsion::Penalty;
-    use crate::forces::Repulsions;
+    use crate::forces::{ObstacleRepulsions, Repulsions};
     use crate::step::{SolverSettings, testing};
 
     /// A repulsion stencil between the corners of the sheet (far apart in the mesh, so its
@@ -239,13 +262,7 @@ mod tests {
         let h = 0.01;
         let at = linearization(&m, h);
         let (mut sys, base) = base_then_contact(&m, &forces, &at, &r);
-        let mut only = BlockMatrix::from_pairs(m.particle_count(), &{
-            let mut p = Vec::new();
-            r.add_pattern(&mut p);
-            p
-        });
-        r.add_jacobian(&at.state(), -h * h, -h, &mut only);
-        let only = only.to_dense();
+        let only = blocks_of(&r, m.particle_count(), &at);
         let full = sys.matrix().to_dense();
         let pre = sys.preconditioner().to_dense();
         let mut coupled = 0;
@@ -280,14 +297,70 @@ mod tests {
     /// support's rim five times the CG iterations).
     #[test]
     fn contacts_inside_the_pattern_are_all_in_the_preconditioner() {
-        use crate::collision::obstacle_proximity::{ObstacleProximity, ObstacleStencilKind};
-        use crate::forces::ObstacleRepulsions;
         let mut m = testing::sheet(5, 0.5, vec![]);
         let forces = super::super::model_forces(&m, &SolverSettings::default());
         let h = 0.01;
+        let r = rim_pair(&m);
+        m.v.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        let at = linearization(&m, h);
+        let (sys, base) = base_then_contact(&m, &forces, &at, &r);
+        let full = sys.matrix().to_dense();
+        // the stencil couples its two particles in every direction (normal penalty, tangential
+        // damping), and the preconditioner holds exactly the system matrix
+        for (i, j) in [(0, 3), (1, 4), (2, 5)] {
+            assert!((full[i][j] - base[i][j]).abs() > 1e-3 * full[i][i].abs());
+        }
+        assert_eq!(sys.preconditioner().to_dense(), full);
+    }
+
+    /// With a cloth–cloth pair outside the pattern as well, the preconditioner is the system
+    /// matrix without the cloth–cloth pair's coupling: the rim pair's stays in it.
+    #[test]
+    fn with_both_kinds_only_the_outer_contacts_lose_their_coupling() {
+        let mut m = testing::sheet(5, 0.5, vec![]);
+        let cloth = contact(&mut m.x);
+        let forces = super::super::model_forces(&m, &SolverSettings::default());
+        let h = 0.01;
+        let rim = rim_pair(&m);
+        let at = linearization(&m, h);
+        let mut sys = System::new(m.particle_count(), &forces);
+        sys.use_contacts(&[&cloth, &rim]);
+        sys.assemble(&m.mass, &forces, &at, &[&cloth, &rim], None);
+        let full = sys.matrix().to_dense();
+        let pre = sys.preconditioner().to_dense();
+        let only = blocks_of(&cloth, m.particle_count(), &at);
+        let rim_only = blocks_of(&rim, m.particle_count(), &at);
+        assert!(rim_only[0][3] != 0.0 && only[0][3] == 0.0);
+        for i in 0..full.len() {
+            for j in 0..full.len() {
+                let want = if i / 3 == j / 3 {
+                    full[i][j]
+                } else {
+                    full[i][j] - only[i][j]
+                };
+                assert!((pre[i][j] - want).abs() <= 1e-12 * (1.0 + full[i][j].abs()));
+            }
+        }
+    }
+
+    /// The dense blocks of the contact force `r` alone, `-h² K - h D` at `at`.
+    fn blocks_of(r: &dyn Force, n: usize, at: &Linearization) -> Vec<Vec<f64>> {
+        let mut only = BlockMatrix::from_pairs(n, &{
+            let mut p = Vec::new();
+            r.add_pattern(&mut p);
+            p
+        });
+        r.add_jacobian(&at.state(), at.matrix.0, at.matrix.1, &mut only);
+        only.to_dense()
+    }
+
+    /// A cloth–collider pair on the sheet's edge (0, 1), 1 mm from a collider edge below it,
+    /// with a tangential damping.
+    fn rim_pair(m: &crate::model::Model) -> ObstacleRepulsions {
+        use crate::collision::obstacle_proximity::{ObstacleProximity, ObstacleStencilKind};
         let (a, b) = (0u32, 1u32);
         let mid = (m.x[a as usize] + m.x[b as usize]) * 0.5;
-        let r = ObstacleRepulsions::new(
+        ObstacleRepulsions::new(
             vec![ObstacleProximity {
                 kind: ObstacleStencilKind::EdgeEdge,
                 particles: [a, b, a],
@@ -304,16 +377,6 @@ mod tests {
                 stiffness: 1000.0,
                 tangential: false,
             },
-        );
-        m.v.iter_mut().for_each(|v| *v = Vec3::ZERO);
-        let at = linearization(&m, h);
-        let (sys, base) = base_then_contact(&m, &forces, &at, &r);
-        let full = sys.matrix().to_dense();
-        // the stencil couples its two particles in every direction (normal penalty, tangential
-        // damping), and the preconditioner holds exactly the system matrix
-        for (i, j) in [(0, 3), (1, 4), (2, 5)] {
-            assert!((full[i][j] - base[i][j]).abs() > 1e-3 * full[i][i].abs());
-        }
-        assert_eq!(sys.preconditioner().to_dense(), full);
+        )
     }
 }
