@@ -19,6 +19,7 @@ use crate::collision::proximity::proximities;
 use crate::collision::repulsion::Penalty;
 use crate::constraints::obstacle::{self, ObstacleContact};
 use crate::forces::{Force, ObstacleRepulsions, Repulsions};
+use crate::math::Vec3;
 use crate::model::Model;
 
 /// The sliding speed (m/s) at which the tangential damping of a cloth–collider pair reaches
@@ -103,9 +104,13 @@ pub(crate) fn contacts(
         let margin = 2.0 * c.thickness;
         let owner = (k as u32, pose.h);
         let mut pairs = obstacle_proximities(x0, triangles, edges, &features, owner, margin);
-        // friction, viscous: the Coulomb force of the starting normal force at SLIP
+        // friction, lagged Coulomb: viscous below SLIP
         for p in &mut pairs {
-            p.damping = o.friction * c.stiffness * (c.thickness - p.dist).max(0.0) / SLIP;
+            let u: Vec3 = (0..3).map(|i| p.weights[i] * start.v0[p.particles[i] as usize]).sum();
+            let u = u - p.velocity;
+            let slide = (u - p.normal * p.normal.dot(u)).length();
+            p.damping =
+                o.friction * c.stiffness * (c.thickness - p.dist).max(0.0) / slide.max(SLIP);
         }
         near.extend(pairs);
     }
