@@ -3,7 +3,7 @@
 //! (`drapery check --scene`).
 
 mod common;
-use common::{assert_rejected, run_and_check, yaw};
+use common::{assert_rejected, run_and_check, stitch_gaps, yaw};
 use drapery::Vec3;
 
 /// The skirt (examples/skirt.toml): two flat panels 0.34 m apart in front of and behind the
@@ -21,12 +21,7 @@ fn skirt_is_sewn_around_the_hips_and_rides_the_walking_turning_mannequin() {
     // after the pre-roll (frame 0) and at the end every stitched pair is closer than the
     // collision thickness
     let initial = model.positions();
-    let widest = |x: &[Vec3]| {
-        stitches
-            .iter()
-            .map(|s| (x[s.a as usize] - x[s.b as usize]).length())
-            .fold(0.0, f64::max)
-    };
+    let widest = |x: &[Vec3]| stitch_gaps(stitches, x).into_iter().fold(0.0, f64::max);
     assert!(widest(initial) > 0.3, "{}", widest(initial));
     for k in [0, frames.len() - 1] {
         assert!(widest(&frames[k]) < th, "frame {k}: {}", widest(&frames[k]));

@@ -3,7 +3,7 @@
 //! free of intersections (`drapery check --scene`).
 
 mod common;
-use common::{examples, run_and_check};
+use common::{examples, run_and_check, stitch_gaps};
 use drapery::Vec3;
 use drapery::io::obj::read_obj;
 
@@ -45,11 +45,7 @@ fn top_is_sewn_around_the_torso_and_turns_with_the_body() {
     // the front and back panels start 0.34 m apart; after the pre-roll (frame 0) and at the
     // end every stitched pair is closer than half an edge (the seam closed to within the mesh's
     // spacing) and nine in ten are closer than the collision thickness
-    let gaps = |x: &[Vec3]| -> Vec<f64> {
-        (stitches.iter())
-            .map(|s| (x[s.a as usize] - x[s.b as usize]).length())
-            .collect()
-    };
+    let gaps = |x: &[Vec3]| stitch_gaps(stitches, x);
     let initial = model.positions();
     let widest = gaps(initial).into_iter().fold(0.0, f64::max);
     assert!(widest > 0.3, "{widest}");

@@ -173,3 +173,10 @@ pub fn yaw(p: Vec3, q: Vec3) -> f64 {
     let d = (-q.z).atan2(q.x) - (-p.z).atan2(p.x);
     (d + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
 }
+
+/// The distance between the two particles of each stitched pair in the positions `x`.
+pub fn stitch_gaps(stitches: &[drapery::model::Stitch], x: &[Vec3]) -> Vec<f64> {
+    (stitches.iter())
+        .map(|s| (x[s.a as usize] - x[s.b as usize]).length())
+        .collect()
+}

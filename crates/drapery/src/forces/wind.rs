@@ -262,8 +262,8 @@ impl WindForce {
             return (zero, zero);
         }
         let (_, e) = area_normal(self.triangles[s], at.x);
+        let f = self.lift(&l);
         let (u, n, w, len) = (l.rel, l.n, l.w, l.s2.sqrt());
-        let f = (kl / len) * (w * q * n - (w * w / q) * u);
         // ∂f/∂N
         let g = (kl / len)
             * (q * outer(n, u) + (q * w) * Mat3::IDENTITY - (2.0 * w / q) * outer(u, u))
