@@ -12,7 +12,10 @@
 //! Friction is a tangential damping in the solve: `fᵢ = -c wᵢ (I - n nᵀ)(Σ wⱼ vⱼ - v_q)` with the
 //! stencil's coefficient `c` and its normal at the start of the step, linear in `v`, its
 //! `∂f/∂v = -c (w wᵀ) ⊗ (I - n nᵀ)` symmetric negative semi-definite (in the matrix as it is),
-//! its dissipation potential `½ c |(I - n nᵀ)(Σ wⱼ vⱼ - v_q)|²`.
+//! its dissipation potential `½ c |(I - n nᵀ)(Σ wⱼ vⱼ - v_q)|²`. The coefficient is a lagged
+//! Coulomb one ([`lagged_coulomb`]): `c = μN / max(SLIP, |u_t|)` with the sliding speed `|u_t|`
+//! at the start of the step, so that at that speed the force is the Coulomb force `μN`, never
+//! more.
 
 use super::stencil::{Full, Gather, Local, StencilForce};
 use super::{Linearization, State};
@@ -53,13 +56,25 @@ impl ObstacleRepulsions {
     }
 }
 
+/// The sliding speed (m/s) below which the friction of a cloth–collider pair is viscous: its
+/// coefficient stops growing there (docs/MATH.md §24).
+pub(crate) const SLIP: f64 = 1e-3;
+
+/// The damping coefficient (N·s/m) of lagged Coulomb friction with the Coulomb force `mu_n`
+/// (`μN`, N) and the sliding speed `slide` (m/s) at the start of the step: `μN / max(SLIP,
+/// slide)`. At the starting speed the force `c |u_t|` is `μN` above `SLIP` and `μN |u_t|/SLIP`
+/// below (docs/MATH.md §24).
+pub(crate) fn lagged_coulomb(mu_n: f64, slide: f64) -> f64 {
+    mu_n / slide.max(SLIP)
+}
+
 /// The tangential projector `I - n nᵀ` of stencil `st` (its normal at the start of the step).
 fn tangential(st: &ObstacleProximity) -> Mat3 {
     Mat3::IDENTITY - crate::math::outer(st.normal, st.normal)
 }
 
 /// The sliding velocity `(I - n nᵀ)(Σ wᵢ vᵢ - v_q)` of stencil `st`.
-fn sliding(st: &ObstacleProximity, v: &[Vec3]) -> Vec3 {
+pub(crate) fn sliding(st: &ObstacleProximity, v: &[Vec3]) -> Vec3 {
     let u: Vec3 = (0..3)
         .map(|a| v[st.particles[a] as usize] * st.weights[a])
         .sum();
@@ -271,6 +286,68 @@ mod tests {
                 rep.add_force(&at(&x, &v), &mut f);
                 let total: Vec3 = f.iter().sum();
                 prop_assert!(total.dot(one.normal).abs() <= 1e-9 * (1.0 + total.length()));
+            }
+        }
+
+        /// Lagged Coulomb friction, each stencil's coefficient `lagged_coulomb(μ k (η - d₀),
+        /// |u_t(v₀)|)` from a starting velocity `v₀` whose sliding speeds span 10⁻⁵ to 10 m/s:
+        /// with the lag frozen, `∂f/∂v` in the matrix equals central differences of the force
+        /// in `v` (at any `v`); the damping force (the force less its value with every particle
+        /// moving with the collider point) does no positive work in the collider's frame,
+        /// `Σ fᵢ·(vᵢ - v_q) ≤ 0`; and at `v = v₀` its total is at most `μN`, and equals `μN`
+        /// whenever the sliding speed is at least `SLIP`. The viscous coefficient `μN / SLIP`
+        /// the branch had before gives `μN |u_t| / SLIP` there: above `μN` at any speed over
+        /// `SLIP` (asserted too).
+        #[test]
+        fn lagged_coulomb_friction_dissipates_and_never_exceeds_the_coulomb_force(
+            x in prop::collection::vec(vec3(0.02), 4),
+            v0 in prop::collection::vec(vec3(1.0), 4),
+            v in prop::collection::vec(vec3(1.0), 4),
+            bary in prop::array::uniform3(0.05..1.0f64),
+            s in 0.1..0.9f64,
+            dirs in prop::array::uniform2(vec3(1.0)),
+            d in prop::array::uniform2(0.0..0.95f64),
+            mu in 0.05..1.0f64,
+            vq in vec3(1.0),
+            decade in -5.0..1.0f64,
+        ) {
+            let Some(st) = stencils(&x, bary, s, dirs, d) else { return Ok(()) };
+            let scale = 10f64.powf(decade);
+            let (v0, vq): (Vec<Vec3>, Vec3) = (v0.iter().map(|u| *u * scale).collect(), vq * scale);
+            for mut one in st {
+                one.velocity = vq;
+                let mu_n = mu * PENALTY.stiffness * (PENALTY.thickness - one.dist);
+                let slide = sliding(&one, &v0).length();
+                one.damping = lagged_coulomb(mu_n, slide);
+                let rep = ObstacleRepulsions::new(vec![one], PENALTY);
+                // the Jacobian in v, the lag frozen
+                let dv = assembled(&rep, &x, &v, 0.0, 1.0);
+                let fd = fd_jacobian_step(&rep, &x, &v, true, 1.0);
+                prop_assert!(rel_diff(&dv, &fd) < 1e-9, "{}", rel_diff(&dv, &fd));
+                // the damping force of `rep` at velocities `w`
+                let damping = |rep: &ObstacleRepulsions, w: &[Vec3]| {
+                    let (mut f, mut f_rest) = (vec![Vec3::ZERO; 4], vec![Vec3::ZERO; 4]);
+                    rep.add_force(&at(&x, w), &mut f);
+                    rep.add_force(&at(&x, &[vq; 4]), &mut f_rest);
+                    (0..4).map(|i| f[i] - f_rest[i]).collect::<Vec<Vec3>>()
+                };
+                for w in [&v, &v0] {
+                    let f = damping(&rep, w);
+                    let power: f64 = (0..4).map(|i| f[i].dot(w[i] - vq)).sum();
+                    let size: f64 = (0..4).map(|i| f[i].length() * (w[i] - vq).length()).sum();
+                    prop_assert!(power <= 1e-12 * size, "power {power}");
+                }
+                let total: Vec3 = damping(&rep, &v0).iter().sum();
+                prop_assert!(total.length() <= mu_n * (1.0 + 1e-9), "{} > μN {mu_n}", total.length());
+                if slide >= SLIP {
+                    prop_assert!((total.length() - mu_n).abs() <= 1e-9 * mu_n);
+                }
+                // the old viscous law, c = μN / SLIP, exceeds μN at any sliding over SLIP
+                let old = ObstacleRepulsions::new(vec![ObstacleProximity { damping: mu_n / SLIP, ..one }], PENALTY);
+                let total_old: Vec3 = damping(&old, &v0).iter().sum();
+                if slide > 1.01 * SLIP {
+                    prop_assert!(total_old.length() > 1.009 * mu_n, "{} vs μN {mu_n}", total_old.length());
+                }
             }
         }
 

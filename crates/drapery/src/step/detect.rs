@@ -18,14 +18,9 @@ use crate::collision::obstacle_proximity::{SharpFeatures, obstacle_proximities};
 use crate::collision::proximity::proximities;
 use crate::collision::repulsion::Penalty;
 use crate::constraints::obstacle::{self, ObstacleContact};
+use crate::forces::obstacle_repulsion::{lagged_coulomb, sliding};
 use crate::forces::{Force, ObstacleRepulsions, Repulsions};
-use crate::math::Vec3;
 use crate::model::Model;
-
-/// The sliding speed (m/s) at which the tangential damping of a cloth–collider pair reaches
-/// the Coulomb force `μ k (η − d)` of its normal force at the start of the step
-/// (docs/MATH.md §24).
-const SLIP: f64 = 1e-3;
 
 /// The contacts of one step.
 #[derive(Clone, Debug, Default)]
@@ -104,13 +99,11 @@ pub(crate) fn contacts(
         let margin = 2.0 * c.thickness;
         let owner = (k as u32, pose.h);
         let mut pairs = obstacle_proximities(x0, triangles, edges, &features, owner, margin);
-        // friction, lagged Coulomb: viscous below SLIP
+        // friction, lagged Coulomb: the Coulomb force of the starting normal force at the
+        // starting sliding speed (viscous below 1 mm/s)
         for p in &mut pairs {
-            let u: Vec3 = (0..3).map(|i| p.weights[i] * start.v0[p.particles[i] as usize]).sum();
-            let u = u - p.velocity;
-            let slide = (u - p.normal * p.normal.dot(u)).length();
-            p.damping =
-                o.friction * c.stiffness * (c.thickness - p.dist).max(0.0) / slide.max(SLIP);
+            let normal = c.stiffness * (c.thickness - p.dist).max(0.0);
+            p.damping = lagged_coulomb(o.friction * normal, sliding(p, &start.v0).length());
         }
         near.extend(pairs);
     }
