@@ -77,11 +77,12 @@ fn drape(text: &str) -> (f64, f64) {
 }
 
 /// Issue 16's resolution test. The coefficient is measured at 2 cm, 1.5 cm, 1 cm and 5 mm and
-/// printed; the resolutions with a ring of vertices on the rim finer than the bending length
-/// (cotton: 2.4 cm), 1.5 cm and 1 cm, must agree with 5 mm within 3 % of it,
+/// printed. 1.5 cm and 1 cm (edges below the bending length, 2.4 cm for cotton, and a ring of
+/// vertices on the rim, as at 5 mm) must agree with 5 mm within 3 % of it,
 /// `|DC − DC(5 mm)| ≤ 0.03 DC(5 mm)`. 2 cm (no ring on the rim, edge ≈ the bending length) is
-/// only required to settle with a coefficient in (0, 1): it lies 5 % below 5 mm, for reasons
-/// docs/MATERIALS.md §4.4 gives (friction on the rim is not one of them).
+/// only required to settle with a coefficient in (0, 1): it lies 5 % below 5 mm, which issue 16
+/// does not allow; docs/MATERIALS.md §4.4 records what was measured about it (friction on the
+/// rim is not the cause).
 #[test]
 fn cusick_drape_coefficient_is_resolution_independent() {
     let density = drapery::textile::fabrics::fabric("cotton").unwrap().density;
