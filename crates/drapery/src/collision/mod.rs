@@ -9,6 +9,8 @@
 //! * [`distance`] gives closest points and the barycentric weights of a contact;
 //! * [`proximity`] turns candidates into contact stencils (particle indices and weights);
 //! * [`repulsion`] turns a close pair into forces and a 12×12 Jacobian (docs/MATH.md §4);
+//! * [`obstacle_proximity`] finds cloth edges and triangles close to mesh colliders' sharp
+//!   edges and vertices (docs/MATH.md §24);
 //! * [`friction`] applies Coulomb friction to cloth–cloth contacts after the solve;
 //! * [`seams`] exempts the contact pairs around stitched vertices, so a seam can close;
 //! * [`ccd`] finds the earliest time of impact over a step, so nothing passes through;
@@ -24,6 +26,7 @@ pub mod distance;
 pub mod failsafe;
 pub mod frame_check;
 pub mod friction;
+pub mod obstacle_proximity;
 pub mod predicates;
 pub mod proximity;
 pub mod repulsion;

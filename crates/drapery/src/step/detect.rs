@@ -5,15 +5,21 @@
 //!   repulsion stencils ([`Repulsions`]) whose Jacobians enter the system matrix, except the
 //!   exempt ones: those within a stitched neighbourhood ([`Seams`]), which must be free to
 //!   close, and those around a crossing the cloth started with ([`super::tangles`]), which
-//!   repulsion would hold crossed.
+//!   repulsion would hold crossed;
+//! * cloth–collider contacts: cloth edges and triangles within twice the thickness of a mesh
+//!   collider's sharp edges and vertices become repulsion stencils too
+//!   ([`ObstacleRepulsions`], docs/MATH.md §24), except those of cloth being pushed out of a
+//!   collider it started inside.
 
 use super::guard::Start;
 use super::pose::Pose;
 use crate::collision::broad_phase::candidates;
+use crate::collision::obstacle_proximity::{SharpFeatures, obstacle_proximities};
 use crate::collision::proximity::proximities;
 use crate::collision::repulsion::Penalty;
 use crate::constraints::obstacle::{self, ObstacleContact};
-use crate::forces::Repulsions;
+use crate::forces::obstacle_repulsion::{lagged_coulomb, sliding};
+use crate::forces::{Force, ObstacleRepulsions, Repulsions};
 use crate::model::Model;
 
 /// The contacts of one step.
@@ -27,6 +33,17 @@ pub(crate) struct Contacts {
     pub candidates: usize,
     /// Broad-phase builds (1 with self-collision, else 0).
     pub builds: usize,
+    /// Cloth–collider repulsion stencils (none without mesh colliders or close pairs).
+    pub obstacle_repulsions: Option<ObstacleRepulsions>,
+}
+
+impl Contacts {
+    /// The contact forces of the step: cloth–cloth repulsion, then cloth–collider repulsion.
+    pub fn forces(&self) -> Vec<&dyn Force> {
+        let cloth = self.repulsions.as_ref().map(|r| r as &dyn Force);
+        let obstacle = self.obstacle_repulsions.as_ref().map(|r| r as &dyn Force);
+        cloth.into_iter().chain(obstacle).collect()
+    }
 }
 
 /// The contacts at the start of the step (none with collisions off).
@@ -53,6 +70,11 @@ pub(crate) fn contacts(
         model.gravity.length() * pose.h,
     );
     let (mut pairs, mut builds) = (0, 0);
+    let penalty = Penalty {
+        thickness: c.thickness,
+        stiffness: c.stiffness,
+        tangential: false,
+    };
     let repulsions = if c.self_collision {
         let cand = candidates(x0, x0, triangles, edges, c.thickness);
         (pairs, builds) = (cand.vt.len() + cand.ee.len(), 1);
@@ -60,24 +82,43 @@ pub(crate) fn contacts(
         stencils.retain(|s| {
             s.particles.iter().any(|&p| !pose.pinned[p as usize]) && !exempt(&s.particles)
         });
-        (!stencils.is_empty()).then(|| {
-            Repulsions::new(
-                stencils,
-                Penalty {
-                    thickness: c.thickness,
-                    stiffness: c.stiffness,
-                    tangential: false,
-                },
-            )
-        })
+        (!stencils.is_empty()).then(|| Repulsions::new(stencils, penalty))
     } else {
         None
     };
+    let n = model.particle_count() as u32;
+    let mut near = Vec::new();
+    for (k, o) in model.obstacles.iter().enumerate() {
+        let (Some((v0, tris)), Some((v1, _))) = (
+            o.collider.surface(pose.t0),
+            o.collider.surface(pose.t0 + pose.h),
+        ) else {
+            continue;
+        };
+        let features = SharpFeatures::new(v0, v1, tris);
+        let margin = 2.0 * c.thickness;
+        let owner = (k as u32, pose.h);
+        let mut pairs = obstacle_proximities(x0, triangles, edges, &features, owner, margin);
+        // friction, lagged Coulomb: the Coulomb force of the starting normal force at the
+        // starting sliding speed (viscous below 1 mm/s)
+        for p in &mut pairs {
+            let normal = c.stiffness * (c.thickness - p.dist).max(0.0);
+            p.damping = lagged_coulomb(o.friction * normal, sliding(p, &start.v0).length());
+        }
+        near.extend(pairs);
+    }
+    // (the obstacle is particle `n` for `exempt`, as in the fail-safe's pairs)
+    near.retain(|s| {
+        let [a, b, c] = s.particles;
+        s.particles.iter().any(|&p| !pose.pinned[p as usize]) && !exempt(&[a, b, c, n])
+    });
+    let obstacle_repulsions = (!near.is_empty()).then(|| ObstacleRepulsions::new(near, penalty));
     Contacts {
         obstacle,
         repulsions,
         candidates: pairs,
         builds,
+        obstacle_repulsions,
     }
 }
 

@@ -12,7 +12,7 @@
 //! product `K w` from one evaluation ([`crate::forces::Force::add_linearization`]).
 
 use super::system::System;
-use crate::forces::{Force, Linearization, Repulsions};
+use crate::forces::{Force, Linearization};
 use crate::math::Vec3;
 use rayon::prelude::*;
 
@@ -62,7 +62,7 @@ pub(crate) fn run(
     system: &mut System,
     mass: &[f64],
     forces: &[Box<dyn Force>],
-    contact: Option<&Repulsions>,
+    contacts: &[&dyn Force],
     it: &Iterate,
     out: &mut Linearized,
 ) {
@@ -86,7 +86,7 @@ pub(crate) fn run(
         product: (h, 0.0),
         w,
     };
-    system.assemble(mass, forces, &at, contact, Some((&mut f[..], &mut kw[..])));
+    system.assemble(mass, forces, &at, contacts, Some((&mut f[..], &mut kw[..])));
     rhs.par_iter_mut()
         .enumerate()
         .with_min_len(PARTICLES)
@@ -115,7 +115,7 @@ mod tests {
             v: &m.v,
             h,
         };
-        run(&mut sys, &m.mass, &forces, None, &it, &mut out);
+        run(&mut sys, &m.mass, &forces, &[], &it, &mut out);
         // independently: f and K v from the forces' own calls
         let mut f = vec![Vec3::ZERO; n];
         let mut kv = vec![Vec3::ZERO; n];

@@ -187,10 +187,11 @@ impl Simulation {
                 &pose,
                 &|ids| self.seams.exempt(ids) || tangles.exempt(ids, n),
             );
-            self.system.use_contacts(c.repulsions.as_ref());
+            self.system.use_contacts(&c.forces());
             c
         });
         let repulsions = contacts.repulsions.as_ref();
+        let contact_forces = contacts.forces();
         report.self_contacts = repulsions.map_or(0, |r| r.stencils.len());
         report.proximity_candidates = contacts.candidates;
         report.broad_phase_builds = contacts.builds;
@@ -201,14 +202,14 @@ impl Simulation {
         work.solve.resize(n);
         work.dv.resize(n, Vec3::ZERO);
         let (mut x, mut v) = (start.x0.clone(), start.v0.clone());
-        let mut active = ActiveSet::new(contacts.obstacle);
+        let mut active = ActiveSet::new(contacts.obstacle.clone());
         let gh = self.model.gravity.length() * h;
         let newton = self.settings.newton_iterations;
         let potential = Potential {
             t0: self.time,
             mass: &self.model.mass,
             forces: &self.forces,
-            contact: repulsions,
+            contacts: &contact_forces,
             x0: &start.x0,
             v0: &start.v0,
             h,
@@ -228,7 +229,7 @@ impl Simulation {
                     &mut self.system,
                     mass,
                     forces,
-                    repulsions,
+                    &contact_forces,
                     &iterate,
                     &mut work.linearized,
                 );
@@ -495,7 +496,7 @@ impl Simulation {
     /// for benchmarks and inspection.
     pub fn assemble_matrix(&mut self, h: f64) {
         let (x, v) = (&self.model.x, &self.model.v);
-        self.system.use_contacts(None);
+        self.system.use_contacts(&[]);
         let at = Linearization {
             t: self.time,
             x,
@@ -506,7 +507,7 @@ impl Simulation {
             w: v,
         };
         self.system
-            .assemble(&self.model.mass, &self.forces, &at, None, None);
+            .assemble(&self.model.mass, &self.forces, &at, &[], None);
     }
 
     /// What is still tangled: free cloth vertices being pushed out of colliders and crossed

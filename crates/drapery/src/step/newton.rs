@@ -6,7 +6,7 @@
 //! potential of damping and drag; docs/MATH.md §10). The first iteration is the linearized step;
 //! each one halves its step along the solved direction until `Φ` does not increase.
 
-use crate::forces::{Force, Repulsions, State};
+use crate::forces::{Force, State};
 use crate::math::Vec3;
 
 /// What the update found.
@@ -19,15 +19,15 @@ pub(crate) enum Outcome {
     NonFinite(usize),
 }
 
-/// The model's forces plus this step's contact force, if any.
+/// The model's forces plus this step's contact forces.
 pub(crate) fn all_forces<'a>(
     forces: &'a [Box<dyn Force>],
-    contact: Option<&'a Repulsions>,
+    contacts: &'a [&'a dyn Force],
 ) -> impl Iterator<Item = &'a dyn Force> {
     forces
         .iter()
         .map(|f| f.as_ref())
-        .chain(contact.map(|c| c as &dyn Force))
+        .chain(contacts.iter().copied())
 }
 
 /// The forces of a step and where it started.
@@ -38,8 +38,8 @@ pub(crate) struct Potential<'a> {
     pub mass: &'a [f64],
     /// The model's forces.
     pub forces: &'a [Box<dyn Force>],
-    /// The step's contact force.
-    pub contact: Option<&'a Repulsions>,
+    /// The step's contact forces (cloth–cloth, then cloth–collider).
+    pub contacts: &'a [&'a dyn Force],
     /// Start of the step.
     pub x0: &'a [Vec3],
     /// Start of the step.
@@ -60,7 +60,7 @@ impl Potential<'_> {
             .map(|(m, (a, b))| 0.5 * m * (*a - *b).length_squared())
             .sum();
         inertia
-            + all_forces(self.forces, self.contact)
+            + all_forces(self.forces, self.contacts)
                 .map(|f| {
                     let at = State { t, x: &x, v };
                     f.energy(t, &x) + h * f.dissipation(&at)
@@ -72,7 +72,7 @@ impl Potential<'_> {
     /// gravity's, the first force, whose work over a step the blow-up test allows for
     /// separately).
     pub fn stored_energy(&self, x: &[Vec3]) -> f64 {
-        all_forces(&self.forces[1..], self.contact)
+        all_forces(&self.forces[1..], self.contacts)
             .map(|f| f.energy(self.t0, x))
             .sum()
     }
@@ -139,7 +139,7 @@ mod tests {
             t0: 0.0,
             mass,
             forces: &[],
-            contact: None,
+            contacts: &[],
             x0,
             v0,
             h: 0.1,

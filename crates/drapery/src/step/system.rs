@@ -1,14 +1,19 @@
 //! Which matrices a step uses and why.
 //!
 //! * The **system matrix** `A = M - h D - h² K` of the Newton iteration, on the pattern of the
-//!   model's forces, enlarged by this step's cloth–cloth contact pairs when there are any.
+//!   model's forces, enlarged by this step's contact pairs (cloth–cloth, cloth–collider) when there
+//!   are any.
 //! * Without contacts the mass and the model's forces are assembled straight into it.
 //! * With contacts they are assembled into the **base matrix** (the fixed pattern of the model's
 //!   forces), copied into the enlarged system matrix, and the contact blocks added there; the
 //!   **preconditioner matrix** is the base matrix plus the contacts' diagonal blocks (their
 //!   coupling left out), so the multigrid keeps one structure for the whole run.
+//! * Contacts that add no block to the base pattern (the cloth–collider pairs, whose cloth
+//!   particles share a triangle or an edge) are assembled with the model's forces, into the base
+//!   matrix, so the preconditioner gets their blocks, coupling and all; when all contacts are
+//!   such, the system matrix keeps the base pattern and is its own preconditioner.
 
-use crate::forces::{Force, Linearization, Repulsions};
+use crate::forces::{Force, Linearization};
 use crate::linalg::BlockMatrix;
 use crate::math::{Mat3, Vec3};
 
@@ -27,6 +32,8 @@ pub(crate) struct System {
     matrix: BlockMatrix,
     /// Whether this step's contact pairs enlarge the system matrix's pattern.
     with_contacts: bool,
+    /// Per contact force of this step: whether all its pairs are in the base pattern.
+    inner: Vec<bool>,
 }
 
 impl System {
@@ -44,6 +51,7 @@ impl System {
             precond: matrix.clone(),
             matrix,
             with_contacts: false,
+            inner: Vec::new(),
         }
     }
 
@@ -52,14 +60,13 @@ impl System {
         &self.matrix
     }
 
-    /// What the preconditioner is built from: the system matrix itself without contacts (PCG
-    /// then multiplies by the multigrid's compact copy), the base matrix when the contacts add
-    /// no block to its pattern, else the base plus the contacts' diagonal blocks.
+    /// What the preconditioner is built from: the system matrix itself when no contact
+    /// enlarges its pattern (PCG then multiplies by the multigrid's compact copy), else the
+    /// base matrix (with the contacts inside its pattern) plus the other contacts' diagonal
+    /// blocks.
     pub fn preconditioner(&self) -> &BlockMatrix {
         if !self.with_contacts {
             &self.matrix
-        } else if self.matrix.same_pattern(&self.base) {
-            &self.base
         } else {
             &self.precond
         }
@@ -71,52 +78,62 @@ impl System {
     }
 
     /// Sets the system matrix's pattern for this step: the base pattern, or the base plus the
-    /// contact pairs (then also where each base block goes in it).
-    pub fn use_contacts(&mut self, contact: Option<&Repulsions>) {
+    /// contact pairs of the `contacts` forces that are not all in it (then also where each base
+    /// block goes in it).
+    pub fn use_contacts(&mut self, contacts: &[&dyn Force]) {
         let n = self.base.n();
-        match contact {
-            Some(r) => {
-                let mut pairs = self.base_pairs.clone();
-                r.add_pattern(&mut pairs);
-                self.matrix = BlockMatrix::from_pairs(n, &pairs);
-                let (base, merged) = (&self.base, &self.matrix);
-                self.base_slots.clear();
-                for i in 0..n {
-                    let (cols, _) = base.row(i);
-                    let (mcols, mr) = merged.row(i);
-                    let mut k = 0;
-                    for c in cols {
-                        while mcols[k] != *c {
-                            k += 1;
-                        }
-                        self.base_slots.push((mr.start + k) as u32);
+        let mut pairs = self.base_pairs.clone();
+        self.inner.clear();
+        for r in contacts {
+            let mut own = Vec::new();
+            r.add_pattern(&mut own);
+            let inner = own
+                .iter()
+                .all(|&(i, j)| self.base.find(i as usize, j as usize).is_some());
+            self.inner.push(inner);
+            if !inner {
+                pairs.extend(own);
+            }
+        }
+        if self.inner.contains(&false) {
+            self.matrix = BlockMatrix::from_pairs(n, &pairs);
+            let (base, merged) = (&self.base, &self.matrix);
+            self.base_slots.clear();
+            for i in 0..n {
+                let (cols, _) = base.row(i);
+                let (mcols, mr) = merged.row(i);
+                let mut k = 0;
+                for c in cols {
+                    while mcols[k] != *c {
+                        k += 1;
                     }
+                    self.base_slots.push((mr.start + k) as u32);
                 }
-                self.with_contacts = true;
             }
-            None if self.with_contacts => {
-                // shares the base pattern again (the forces' gather lists stay valid)
-                self.matrix = self.base.clone();
-                self.with_contacts = false;
-            }
-            None => {}
+            self.with_contacts = true;
+        } else if self.with_contacts {
+            // shares the base pattern again (the forces' gather lists stay valid)
+            self.matrix = self.base.clone();
+            self.with_contacts = false;
         }
     }
 
     /// Assembles `A = M + a K + b D` at `(at.x, at.v)` with `(a, b) = at.matrix` (`-h²`, `-h`
-    /// in a step): the mass and the model's `forces`, then the `contact` force if any (see the
-    /// module docs for where each goes). With `vectors = (f, kw)`, also adds every force
-    /// (contacts last) to `f` and the products with `at.product` and `at.w` to `kw`, from the
-    /// same evaluation ([`Force::add_linearization`]).
+    /// in a step): the mass and the model's `forces`, then the `contacts` forces if any (those
+    /// of the last [`System::use_contacts`]; see the module docs for where each goes). With
+    /// `vectors = (f, kw)`, also adds every force (contacts last) to `f` and the products with
+    /// `at.product` and `at.w` to `kw`, from the same evaluation ([`Force::add_linearization`]).
     pub fn assemble(
         &mut self,
         mass: &[f64],
         forces: &[Box<dyn Force>],
         at: &Linearization,
-        contact: Option<&Repulsions>,
+        contacts: &[&dyn Force],
         mut vectors: Option<(&mut [Vec3], &mut [Vec3])>,
     ) {
-        let base = if contact.is_some() {
+        debug_assert!(contacts.is_empty() || contacts.len() == self.inner.len());
+        let inner = |k: usize| self.inner[k];
+        let base = if self.with_contacts {
             &mut self.base
         } else {
             &mut self.matrix
@@ -129,14 +146,23 @@ impl System {
         for force in forces {
             add(force.as_ref(), base);
         }
-        let Some(c) = contact else {
+        for (k, c) in contacts.iter().enumerate() {
+            if inner(k) {
+                add(*c, base);
+            }
+        }
+        if !self.with_contacts {
             return;
-        };
+        }
         self.matrix.clear();
         for (k, &slot) in self.base_slots.iter().enumerate() {
             self.matrix.values[slot as usize] = self.base.values[k];
         }
-        add(c, &mut self.matrix);
+        for (k, c) in contacts.iter().enumerate() {
+            if !inner(k) {
+                add(*c, &mut self.matrix);
+            }
+        }
         let p = &mut self.precond;
         p.values.copy_from_slice(&self.base.values);
         for i in 0..mass.len() {
@@ -173,6 +199,7 @@ mod tests {
     use super::*;
     use crate::collision::proximity::{Proximity, StencilKind};
     use crate::collision::repulsion::Penalty;
+    use crate::forces::{ObstacleRepulsions, Repulsions};
     use crate::step::{SolverSettings, testing};
 
     /// A repulsion stencil between the corners of the sheet (far apart in the mesh, so its
@@ -197,6 +224,35 @@ mod tests {
         )
     }
 
+    /// The step's linearization at the model's state (matrix `M - h D - h² K`).
+    fn linearization(m: &crate::model::Model, h: f64) -> Linearization<'_> {
+        Linearization {
+            t: 0.0,
+            x: &m.x,
+            v: &m.v,
+            matrix: (-h * h, -h),
+            product: (0.0, 0.0),
+            w: &m.v,
+        }
+    }
+
+    /// The system assembled without contacts (its dense matrix returned; the preconditioner
+    /// is the matrix itself), then with the `contact` force.
+    fn base_then_contact(
+        m: &crate::model::Model,
+        forces: &[Box<dyn Force>],
+        at: &Linearization,
+        contact: &dyn Force,
+    ) -> (System, Vec<Vec<f64>>) {
+        let mut sys = System::new(m.particle_count(), forces);
+        sys.assemble(&m.mass, forces, at, &[], None);
+        let base = sys.matrix().to_dense();
+        assert!(std::ptr::eq(sys.preconditioner(), sys.matrix()));
+        sys.use_contacts(&[contact]);
+        sys.assemble(&m.mass, forces, at, &[contact], None);
+        (sys, base)
+    }
+
     #[test]
     fn with_contacts_the_system_is_the_base_plus_the_contact_blocks_and_the_preconditioner_their_diagonal()
      {
@@ -204,27 +260,9 @@ mod tests {
         let r = contact(&mut m.x);
         let forces = super::super::model_forces(&m, &SolverSettings::default());
         let h = 0.01;
-        let at = Linearization {
-            t: 0.0,
-            x: &m.x,
-            v: &m.v,
-            matrix: (-h * h, -h),
-            product: (0.0, 0.0),
-            w: &m.v,
-        };
-        let mut sys = System::new(m.particle_count(), &forces);
-        sys.assemble(&m.mass, &forces, &at, None, None);
-        let base = sys.matrix().to_dense();
-        assert!(std::ptr::eq(sys.preconditioner(), sys.matrix()));
-        sys.use_contacts(Some(&r));
-        sys.assemble(&m.mass, &forces, &at, Some(&r), None);
-        let mut only = BlockMatrix::from_pairs(m.particle_count(), &{
-            let mut p = Vec::new();
-            r.add_pattern(&mut p);
-            p
-        });
-        r.add_jacobian(&at.state(), -h * h, -h, &mut only);
-        let only = only.to_dense();
+        let at = linearization(&m, h);
+        let (mut sys, base) = base_then_contact(&m, &forces, &at, &r);
+        let only = blocks_of(&r, m.particle_count(), &at);
         let full = sys.matrix().to_dense();
         let pre = sys.preconditioner().to_dense();
         let mut coupled = 0;
@@ -247,9 +285,98 @@ mod tests {
         }
         assert!(coupled > 0, "the contact must couple particles");
         // back to no contacts: the base pattern again, and the same values as before
-        sys.use_contacts(None);
-        sys.assemble(&m.mass, &forces, &at, None, None);
+        sys.use_contacts(&[]);
+        sys.assemble(&m.mass, &forces, &at, &[], None);
         assert_eq!(sys.matrix().to_dense(), base);
         assert!(std::ptr::eq(sys.preconditioner(), sys.matrix()));
+    }
+
+    /// A cloth–collider stencil on a cloth edge (with its tangential damping) adds no block to
+    /// the springs' pattern: the preconditioner is then the whole system matrix, the stencil's
+    /// coupling included, not the base matrix without it (which cost the Cusick drape on the
+    /// support's rim five times the CG iterations).
+    #[test]
+    fn contacts_inside_the_pattern_are_all_in_the_preconditioner() {
+        let mut m = testing::sheet(5, 0.5, vec![]);
+        let forces = super::super::model_forces(&m, &SolverSettings::default());
+        let h = 0.01;
+        let r = rim_pair(&m);
+        m.v.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        let at = linearization(&m, h);
+        let (sys, base) = base_then_contact(&m, &forces, &at, &r);
+        let full = sys.matrix().to_dense();
+        // the stencil couples its two particles in every direction (normal penalty, tangential
+        // damping), and the preconditioner holds exactly the system matrix
+        for (i, j) in [(0, 3), (1, 4), (2, 5)] {
+            assert!((full[i][j] - base[i][j]).abs() > 1e-3 * full[i][i].abs());
+        }
+        assert_eq!(sys.preconditioner().to_dense(), full);
+    }
+
+    /// With a cloth–cloth pair outside the pattern as well, the preconditioner is the system
+    /// matrix without the cloth–cloth pair's coupling: the rim pair's stays in it.
+    #[test]
+    fn with_both_kinds_only_the_outer_contacts_lose_their_coupling() {
+        let mut m = testing::sheet(5, 0.5, vec![]);
+        let cloth = contact(&mut m.x);
+        let forces = super::super::model_forces(&m, &SolverSettings::default());
+        let h = 0.01;
+        let rim = rim_pair(&m);
+        let at = linearization(&m, h);
+        let mut sys = System::new(m.particle_count(), &forces);
+        sys.use_contacts(&[&cloth, &rim]);
+        sys.assemble(&m.mass, &forces, &at, &[&cloth, &rim], None);
+        let full = sys.matrix().to_dense();
+        let pre = sys.preconditioner().to_dense();
+        let only = blocks_of(&cloth, m.particle_count(), &at);
+        let rim_only = blocks_of(&rim, m.particle_count(), &at);
+        assert!(rim_only[0][3] != 0.0 && only[0][3] == 0.0);
+        for i in 0..full.len() {
+            for j in 0..full.len() {
+                let want = if i / 3 == j / 3 {
+                    full[i][j]
+                } else {
+                    full[i][j] - only[i][j]
+                };
+                assert!((pre[i][j] - want).abs() <= 1e-12 * (1.0 + full[i][j].abs()));
+            }
+        }
+    }
+
+    /// The dense blocks of the contact force `r` alone, `-h² K - h D` at `at`.
+    fn blocks_of(r: &dyn Force, n: usize, at: &Linearization) -> Vec<Vec<f64>> {
+        let mut only = BlockMatrix::from_pairs(n, &{
+            let mut p = Vec::new();
+            r.add_pattern(&mut p);
+            p
+        });
+        r.add_jacobian(&at.state(), at.matrix.0, at.matrix.1, &mut only);
+        only.to_dense()
+    }
+
+    /// A cloth–collider pair on the sheet's edge (0, 1), 1 mm from a collider edge below it,
+    /// with a tangential damping.
+    fn rim_pair(m: &crate::model::Model) -> ObstacleRepulsions {
+        use crate::collision::obstacle_proximity::{ObstacleProximity, ObstacleStencilKind};
+        let (a, b) = (0u32, 1u32);
+        let mid = (m.x[a as usize] + m.x[b as usize]) * 0.5;
+        ObstacleRepulsions::new(
+            vec![ObstacleProximity {
+                kind: ObstacleStencilKind::EdgeEdge,
+                particles: [a, b, a],
+                weights: [0.5, 0.5, 0.0],
+                point: mid - Vec3::Y * 0.001,
+                dist: 0.001,
+                normal: Vec3::Y,
+                obstacle: 0,
+                velocity: Vec3::ZERO,
+                damping: 300.0,
+            }],
+            Penalty {
+                thickness: 0.005,
+                stiffness: 1000.0,
+                tangential: false,
+            },
+        )
     }
 }
