@@ -12,8 +12,9 @@
 //!
 //! The shape printed after each frame: the mean hinge angle (degrees), the mean and 99th
 //! percentile of `|θ|/h` (1/m, a curvature that compares resolutions), the share of hinges bent
-//! over 30°, the least and greatest edge length over rest length, the greatest speed (m/s), and
-//! which particle has it and where. With `SPIN_SCENE=FILE.toml` in the environment both forms
+//! over 30°, the least and greatest edge length over rest length, the share of edges shorter than
+//! 0.8 of their rest length, the greatest speed (m/s), and where the shortest edge is (its first
+//! vertex, and that vertex's distance from the origin, the sphere's centre). With `SPIN_SCENE=FILE.toml` in the environment both forms
 //! run the scene in that file instead (a variant of `drapery bench --write-scenes`'s spin-N,
 //! e.g. another material, same size N) (BENCHMARKS.md, "Tenth session").
 
@@ -61,12 +62,19 @@ impl Shape {
         Shape { hinges, edges }
     }
 
-    /// The least and greatest ratio of an edge's length to its rest length.
-    fn stretch(&self, x: &[Vec3]) -> [f64; 2] {
-        (self.edges.iter()).fold([f64::MAX, 0.0], |[lo, hi], (e, len)| {
+    /// The least and greatest ratio of an edge's length to its rest length, the share of
+    /// edges shorter than 0.8 of it, and the first vertex of the shortest edge.
+    fn stretch(&self, x: &[Vec3]) -> ([f64; 3], usize) {
+        let (mut lo, mut hi, mut short, mut at) = (f64::MAX, 0.0f64, 0usize, 0);
+        for (e, len) in &self.edges {
             let r = (x[e[1] as usize] - x[e[0] as usize]).length() / len;
-            [lo.min(r), hi.max(r)]
-        })
+            if r < lo {
+                (lo, at) = (r, e[0] as usize);
+            }
+            hi = hi.max(r);
+            short += usize::from(r < 0.8);
+        }
+        ([lo, hi, short as f64 / self.edges.len().max(1) as f64], at)
     }
 
     /// `mean |θ| (deg), mean |θ|/h, 99th percentile of |θ|/h (1/m), share of hinges over 30°`.
@@ -108,25 +116,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut sim = simulation(n, false)?;
             let shape = Shape::new(&sim);
             println!(
-                "frame mean_angle_deg mean_curvature p99_curvature share_over_30deg min_stretch max_stretch max_speed fastest x y z r"
+                "frame mean_angle_deg mean_curvature p99_curvature share_over_30deg min_stretch max_stretch share_under_0.8 max_speed shortest_x y z r"
             );
             for f in 1..=count {
                 for _ in 0..per_frame {
                     sim.step(h)?;
                 }
-                let [a, c, p, o] = shape.measure(sim.positions());
-                let [lo, hi] = shape.stretch(sim.positions());
-                let (fast, speed) = (sim.velocities().iter().enumerate())
-                    .fold((0, 0.0f64), |m, (i, v)| {
-                        if v.length() > m.1 { (i, v.length()) } else { m }
-                    });
-                let at = sim.positions()[fast];
+                let [a, c, p99, o] = shape.measure(sim.positions());
+                let ([lo, hi, short], at) = shape.stretch(sim.positions());
+                let speed = (sim.velocities().iter()).fold(0.0f64, |m, v| m.max(v.length()));
+                let p = sim.positions()[at];
                 println!(
-                    "{f} {a:.3} {c:.3} {p:.2} {o:.5} {lo:.4} {hi:.4} {speed:.3} {fast} {:.3} {:.3} {:.3} {:.4}",
-                    at.x,
-                    at.y,
-                    at.z,
-                    at.length()
+                    "{f} {a:.3} {c:.3} {p99:.2} {o:.5} {lo:.4} {hi:.4} {short:.5} {speed:.3} {:.3} {:.3} {:.3} {:.4}",
+                    p.x,
+                    p.y,
+                    p.z,
+                    p.length()
                 );
                 if f < count {
                     std::fs::write(format!("{file}.{f}"), sim.snapshot().to_bytes())?;
