@@ -2,7 +2,7 @@
 //! instead of wall time (BENCHMARKS.md, "Ninth session").
 //!
 //! `cargo run --release -p drapery --example spin_counts -- N save FRAMES FILE` runs `spin-N`
-//! for FRAMES frames (4 steps each) from the start, printing the cloth's shape after each frame
+//! for FRAMES frames (4 steps each, or the SPIN_SCENE file's own) from the start, printing the cloth's shape after each frame
 //! (see [`Shape`]), and saves the state to FILE (and after each earlier frame K to FILE.K);
 //! `... -- N steps STEPS FILE [free]` restores FILE and runs STEPS steps of `spin-N` (or, with
 //! `free`, of the same cloth without collisions, `spin-free-N`), printing each step's counts
@@ -26,16 +26,20 @@ use drapery::{Simulation, Vec3};
 
 /// `spin-N` (or `spin-free-N`), or with the environment variable `SPIN_SCENE` set, the scene
 /// in that file (a variant of `drapery bench --write-scenes`'s, for trying materials; for a
-/// free variant, the file without its `[collision]` and `[[collider]]`).
-fn simulation(n: usize, free: bool) -> Result<Simulation, Box<dyn std::error::Error>> {
+/// free variant, the file without its `[collision]` and `[[collider]]`), with its step and
+/// steps per frame.
+type Run = (Simulation, f64, usize);
+fn simulation(n: usize, free: bool) -> Result<Run, Box<dyn std::error::Error>> {
     let Ok(path) = std::env::var("SPIN_SCENE") else {
         let preset = if free { Preset::SpinFree } else { Preset::Spin };
-        return Ok(preset.simulation(n, 1e-3)?);
+        let (h, per_frame) = preset.step();
+        return Ok((preset.simulation(n, 1e-3)?, h, per_frame));
     };
     if free {
         return Err("with SPIN_SCENE, give the free variant as its own scene file".into());
     }
-    Ok(Scene::load(std::path::Path::new(&path))?.build()?)
+    let scene = Scene::load(std::path::Path::new(&path))?;
+    Ok((scene.build()?, scene.step_size(), scene.steps_per_frame()))
 }
 
 /// How wrinkled the cloth is: the dihedral angles of its hinges (the interior edges of its
@@ -110,10 +114,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n: usize = args[0].parse()?;
     let count: usize = args[2].parse()?;
     let file = &args[3];
-    let (h, per_frame) = Preset::Spin.step();
     match args[1].as_str() {
         "save" => {
-            let mut sim = simulation(n, false)?;
+            let (mut sim, h, per_frame) = simulation(n, false)?;
             let shape = Shape::new(&sim);
             println!(
                 "frame mean_angle_deg mean_curvature p99_curvature share_over_30deg min_stretch max_stretch share_under_0.8 max_speed shortest_x y z r"
@@ -141,7 +144,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         "steps" => {
             let free = args.get(4).is_some_and(|a| a == "free");
-            let mut sim = simulation(n, free)?;
+            let (mut sim, h, _) = simulation(n, free)?;
             sim.restore_snapshot(&Snapshot::from_bytes(&std::fs::read(file)?)?)?;
             println!(
                 "step newton solves cg cg/solve held stencils prox_pairs bp_builds ccd_pairs ccd_rounds ccd_hits"
