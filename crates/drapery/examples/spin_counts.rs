@@ -2,14 +2,108 @@
 //! instead of wall time (BENCHMARKS.md, "Ninth session").
 //!
 //! `cargo run --release -p drapery --example spin_counts -- N save FRAMES FILE` runs `spin-N`
-//! for FRAMES frames (4 steps each) from the start and saves the state to FILE;
+//! for FRAMES frames (4 steps each, or the SPIN_SCENE file's own) from the start, printing the cloth's shape after each frame
+//! (see [`Shape`]), and saves the state to FILE (and after each earlier frame K to FILE.K);
 //! `... -- N steps STEPS FILE [free]` restores FILE and runs STEPS steps of `spin-N` (or, with
 //! `free`, of the same cloth without collisions, `spin-free-N`), printing each step's counts
-//! and their sums. Under `perf stat -e instructions:u` the second form measures STEPS steps
-//! from the same state (building the model and reading FILE are the rest).
+//! and their sums. Under `valgrind --tool=callgrind` (with `RAYON_NUM_THREADS=1`) the second
+//! form counts the instructions of STEPS steps from the same state (building the model and
+//! reading FILE are the rest: subtract a run of 0 steps).
+//!
+//! The shape printed after each frame: the mean hinge angle (degrees), the mean and 99th
+//! percentile of `|θ|/h` (1/m, a curvature that compares resolutions), the share of hinges bent
+//! over 30°, the least and greatest edge length over rest length, the share of edges shorter than
+//! 0.8 of their rest length, the greatest speed (m/s), and where the shortest edge is (its first
+//! vertex, and that vertex's distance from the origin, the sphere's centre). With `SPIN_SCENE=FILE.toml` in the environment both forms
+//! run the scene in that file instead (a variant of `drapery bench --write-scenes`'s spin-N,
+//! e.g. another material, same size N) (BENCHMARKS.md, "Tenth session").
 
+use drapery::forces::hinge::{dihedral_angle, interior_edges};
 use drapery::presets::Preset;
+use drapery::scene::Scene;
 use drapery::snapshot::Snapshot;
+use drapery::{Simulation, Vec3};
+
+/// `spin-N` (or `spin-free-N`), or with the environment variable `SPIN_SCENE` set, the scene
+/// in that file (a variant of `drapery bench --write-scenes`'s, for trying materials; for a
+/// free variant, the file without its `[collision]` and `[[collider]]`), with its step and
+/// steps per frame.
+type Run = (Simulation, f64, usize);
+fn simulation(n: usize, free: bool) -> Result<Run, Box<dyn std::error::Error>> {
+    let Ok(path) = std::env::var("SPIN_SCENE") else {
+        let preset = if free { Preset::SpinFree } else { Preset::Spin };
+        let (h, per_frame) = preset.step();
+        return Ok((preset.simulation(n, 1e-3)?, h, per_frame));
+    };
+    if free {
+        return Err("with SPIN_SCENE, give the free variant as its own scene file".into());
+    }
+    let scene = Scene::load(std::path::Path::new(&path))?;
+    Ok((scene.build()?, scene.step_size(), scene.steps_per_frame()))
+}
+
+/// How wrinkled the cloth is: the dihedral angles of its hinges (the interior edges of its
+/// triangles), as angles and as curvatures `|θ| / h` with `h` the hinge's rest edge length
+/// (the grid's spacing for the axis edges), so that two resolutions compare.
+struct Shape {
+    /// Hinges `[x0, x1, x2, x3]` (edge `x0 x1`) and their rest edge lengths, m.
+    hinges: Vec<([u32; 4], f64)>,
+    /// The mesh's edges and their rest lengths, m.
+    edges: Vec<([u32; 2], f64)>,
+}
+
+impl Shape {
+    fn new(sim: &Simulation) -> Shape {
+        let mesh = &sim.model().cloths()[0].mesh;
+        let x = &mesh.positions;
+        let hinges = interior_edges(&mesh.triangles())
+            .into_iter()
+            .map(|(h, _)| (h, (x[h[1] as usize] - x[h[0] as usize]).length()))
+            .collect();
+        let edges = (mesh.edges().into_iter())
+            .map(|e| (e, (x[e[1] as usize] - x[e[0] as usize]).length()))
+            .collect();
+        Shape { hinges, edges }
+    }
+
+    /// The least and greatest ratio of an edge's length to its rest length, the share of
+    /// edges shorter than 0.8 of it, and the first vertex of the shortest edge.
+    fn stretch(&self, x: &[Vec3]) -> ([f64; 3], usize) {
+        let (mut lo, mut hi, mut short, mut at) = (f64::MAX, 0.0f64, 0usize, 0);
+        for (e, len) in &self.edges {
+            let r = (x[e[1] as usize] - x[e[0] as usize]).length() / len;
+            if r < lo {
+                (lo, at) = (r, e[0] as usize);
+            }
+            hi = hi.max(r);
+            short += usize::from(r < 0.8);
+        }
+        ([lo, hi, short as f64 / self.edges.len().max(1) as f64], at)
+    }
+
+    /// `mean |θ| (deg), mean |θ|/h, 99th percentile of |θ|/h (1/m), share of hinges over 30°`.
+    fn measure(&self, x: &[Vec3]) -> [f64; 4] {
+        let mut curv = Vec::with_capacity(self.hinges.len());
+        let (mut sum, mut over) = (0.0, 0usize);
+        for (h, len) in &self.hinges {
+            let t = dihedral_angle(h.map(|i| x[i as usize]))
+                .unwrap_or(0.0)
+                .abs();
+            sum += t;
+            over += usize::from(t > 30f64.to_radians());
+            curv.push(t / len);
+        }
+        let m = self.hinges.len().max(1) as f64;
+        curv.sort_by(f64::total_cmp);
+        let p99 = curv.get(curv.len() * 99 / 100).copied().unwrap_or(0.0);
+        [
+            (sum / m).to_degrees(),
+            curv.iter().sum::<f64>() / m,
+            p99,
+            over as f64 / m,
+        ]
+    }
+}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -20,19 +114,37 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n: usize = args[0].parse()?;
     let count: usize = args[2].parse()?;
     let file = &args[3];
-    let (h, per_frame) = Preset::Spin.step();
     match args[1].as_str() {
         "save" => {
-            let mut sim = Preset::Spin.simulation(n, 1e-3)?;
-            for _ in 0..count * per_frame {
-                sim.step(h)?;
+            let (mut sim, h, per_frame) = simulation(n, false)?;
+            let shape = Shape::new(&sim);
+            println!(
+                "frame mean_angle_deg mean_curvature p99_curvature share_over_30deg min_stretch max_stretch share_under_0.8 max_speed shortest_x y z r"
+            );
+            for f in 1..=count {
+                for _ in 0..per_frame {
+                    sim.step(h)?;
+                }
+                let [a, c, p99, o] = shape.measure(sim.positions());
+                let ([lo, hi, short], at) = shape.stretch(sim.positions());
+                let speed = (sim.velocities().iter()).fold(0.0f64, |m, v| m.max(v.length()));
+                let p = sim.positions()[at];
+                println!(
+                    "{f} {a:.3} {c:.3} {p99:.2} {o:.5} {lo:.4} {hi:.4} {short:.5} {speed:.3} {:.3} {:.3} {:.3} {:.4}",
+                    p.x,
+                    p.y,
+                    p.z,
+                    p.length()
+                );
+                if f < count {
+                    std::fs::write(format!("{file}.{f}"), sim.snapshot().to_bytes())?;
+                }
             }
             std::fs::write(file, sim.snapshot().to_bytes())?;
         }
         "steps" => {
             let free = args.get(4).is_some_and(|a| a == "free");
-            let preset = if free { Preset::SpinFree } else { Preset::Spin };
-            let mut sim = preset.simulation(n, 1e-3)?;
+            let (mut sim, h, _) = simulation(n, free)?;
             sim.restore_snapshot(&Snapshot::from_bytes(&std::fs::read(file)?)?)?;
             println!(
                 "step newton solves cg cg/solve held stencils prox_pairs bp_builds ccd_pairs ccd_rounds ccd_hits"
