@@ -56,6 +56,8 @@ pub struct SolveStats {
     /// Set when the multigrid turned out not positive definite and the solve went on with its
     /// smoothers damped by an upper bound of `ρ(D⁻¹A)` ([`Multigrid::refresh_bounded`]).
     pub bounded_damping: bool,
+    /// Times the preconditioner was set up (multigrid refreshes, the damped one included).
+    pub setups: usize,
 }
 
 /// Reusable work vectors.
@@ -69,6 +71,17 @@ pub struct PcgScratch {
     partial: Vec<f64>,
     pinv: Vec<Mat3>,
     amg: Multigrid,
+    /// Whether the preconditioner is set up for the last solve's matrix and filter.
+    prepared: bool,
+    /// Whether `c` and `delta` hold the last solve's search direction and `rᵀ P⁻¹ r`
+    /// (so that [`resume`] continues the conjugate directions).
+    directions: bool,
+    /// `rᵀ P⁻¹ r` of the last iteration.
+    delta: f64,
+    /// Reference residual `‖S (b - A z)‖` of the last solve.
+    r0: f64,
+    /// `‖r‖` at the last solve's result (`r` is its filtered residual).
+    rnorm: f64,
 }
 
 impl PcgScratch {
@@ -127,15 +140,55 @@ pub fn solve_preconditioned_by(
     settings: &PcgSettings,
     w: &mut PcgScratch,
 ) -> SolveStats {
-    let n = a.n();
-    debug_assert_eq!(p.n(), n);
-    for v in [&mut w.r, &mut w.c, &mut w.q, &mut w.s] {
-        v.resize(n, Vec3::ZERO);
+    run(a, p, b, s, z, x, settings, w)
+}
+
+/// Continues the previous solve on `w` (by [`solve_preconditioned_by`] or this function, with
+/// the same `a`, `p`, `b`, `s` and `z`) to the tolerance in `settings`, from its result `x`
+/// (unchanged since): the conjugate gradient goes on where it stopped, with the same
+/// preconditioner, so a solve to a loose tolerance followed by this one gives the iterates of
+/// one solve to the tighter tolerance, bit for bit. `settings.max_iterations` counts the
+/// iterations of this call.
+#[allow(clippy::too_many_arguments)]
+pub fn resume(
+    a: &BlockMatrix,
+    p: &BlockMatrix,
+    s: &[Mat3],
+    x: &mut [Vec3],
+    settings: &PcgSettings,
+    w: &mut PcgScratch,
+) -> SolveStats {
+    let mut stats = SolveStats::default();
+    let (r0, mut rnorm) = (w.r0, w.rnorm);
+    if r0 == 0.0 || !r0.is_finite() {
+        stats.relative_residual = if r0 == 0.0 { 0.0 } else { f64::NAN };
+        stats.converged = r0 == 0.0;
+        return stats;
     }
-    let multigrid = settings.preconditioner == Preconditioner::Multigrid;
-    // the multigrid holds the filtered `p` in half the bytes: the product's matrix when `p` is `a`
-    let filtered_product = multigrid && std::ptr::eq(a, p);
-    if multigrid {
+    let target = settings.tolerance * r0;
+    if rnorm <= target {
+        stats.relative_residual = rnorm / r0;
+        stats.converged = true;
+        return stats;
+    }
+    if !w.prepared {
+        prepare(p, s, settings, w, &mut stats);
+    }
+    let filtered_product = settings.preconditioner == Preconditioner::Multigrid && std::ptr::eq(a, p);
+    finish(a, p, s, x, settings, w, target, filtered_product, stats, &mut rnorm)
+}
+
+/// Sets up the preconditioner for `p` filtered by `s`.
+fn prepare(
+    p: &BlockMatrix,
+    s: &[Mat3],
+    settings: &PcgSettings,
+    w: &mut PcgScratch,
+    stats: &mut SolveStats,
+) {
+    stats.setups += 1;
+    let n = p.n();
+    if settings.preconditioner == Preconditioner::Multigrid {
         w.amg.refresh(p, s);
     } else {
         w.pinv.resize(n, Mat3::IDENTITY);
@@ -159,12 +212,45 @@ pub fn solve_preconditioned_by(
                 };
             });
     }
+    w.prepared = true;
+}
+
+/// The solve of [`solve_preconditioned_by`]. The preconditioner is only set up once an iteration is needed: an
+/// initial guess that already meets the tolerance costs no multigrid refresh (unless the
+/// refresh would build the hierarchy's structure from `p`'s values, which must not be
+/// postponed).
+#[allow(clippy::too_many_arguments)]
+fn run(
+    a: &BlockMatrix,
+    p: &BlockMatrix,
+    b: &[Vec3],
+    s: &[Mat3],
+    z: &[Vec3],
+    x: &mut [Vec3],
+    settings: &PcgSettings,
+    w: &mut PcgScratch,
+) -> SolveStats {
+    let n = a.n();
+    debug_assert_eq!(p.n(), n);
+    for v in [&mut w.r, &mut w.c, &mut w.q, &mut w.s] {
+        v.resize(n, Vec3::ZERO);
+    }
+    let multigrid = settings.preconditioner == Preconditioner::Multigrid;
+    // the multigrid holds the filtered `p` in half the bytes: the product's matrix when `p` is `a`
+    let filtered_product = multigrid && std::ptr::eq(a, p);
+    w.prepared = false;
+    w.directions = false;
+    let mut stats = SolveStats::default();
+    if !w.prepared && multigrid && w.amg.builds_from(p) {
+        prepare(p, s, settings, w, &mut stats);
+    }
     // Reference residual: the zero guess on the free part.
     a.mul_vec(z, &mut w.q);
     for i in 0..n {
         w.r[i] = s[i] * (b[i] - w.q[i]);
     }
     let r0 = dot(&w.r, &w.r).sqrt();
+    (w.r0, w.rnorm) = (r0, 0.0);
     // x = z + S x_guess
     for i in 0..n {
         x[i] = z[i] + s[i] * x[i];
@@ -173,35 +259,64 @@ pub fn solve_preconditioned_by(
         for i in 0..n {
             x[i] = z[i];
         }
-        return SolveStats {
-            iterations: 0,
-            relative_residual: if r0 == 0.0 { 0.0 } else { f64::NAN },
-            converged: r0 == 0.0,
-            ..SolveStats::default()
-        };
+        stats.relative_residual = if r0 == 0.0 { 0.0 } else { f64::NAN };
+        stats.converged = r0 == 0.0;
+        return stats;
     }
     a.mul_vec(x, &mut w.q);
     for i in 0..n {
         w.r[i] = s[i] * (b[i] - w.q[i]);
     }
     let target = settings.tolerance * r0;
-    let mut stats = SolveStats::default();
     let mut rnorm = dot(&w.r, &w.r).sqrt();
+    w.rnorm = rnorm;
+    if rnorm <= target {
+        stats.relative_residual = rnorm / r0;
+        stats.converged = true;
+        return stats;
+    }
+    if !w.prepared {
+        prepare(p, s, settings, w, &mut stats);
+    }
+    finish(a, p, s, x, settings, w, target, filtered_product, stats, &mut rnorm)
+}
+
+/// The iterations of a solve whose preconditioner is set up (continuing the kept conjugate
+/// directions when `w.directions` says so), and the stats.
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    a: &BlockMatrix,
+    p: &BlockMatrix,
+    s: &[Mat3],
+    x: &mut [Vec3],
+    settings: &PcgSettings,
+    w: &mut PcgScratch,
+    target: f64,
+    filtered_product: bool,
+    mut stats: SolveStats,
+    rnorm: &mut f64,
+) -> SolveStats {
     let mut run = |w: &mut PcgScratch, stats: &mut SolveStats, rnorm: &mut f64| {
         iterate(a, s, x, settings, w, target, filtered_product, stats, rnorm)
     };
-    run(w, &mut stats, &mut rnorm);
-    if stats.bad_preconditioner && multigrid {
+    run(w, &mut stats, rnorm);
+    if stats.bad_preconditioner && settings.preconditioner == Preconditioner::Multigrid {
         // The cycle was not positive definite (a power estimate of ρ(D⁻¹A) far below ρ leaves
         // ω ρ ≥ 2): damp its smoothers by an upper bound of ρ instead, and restart the
         // conjugate directions from the current iterate.
         w.amg.refresh_bounded(p, s);
+        stats.setups += 1;
         stats.bad_preconditioner = false;
         stats.bounded_damping = true;
-        run(w, &mut stats, &mut rnorm);
+        w.directions = false;
+        run(w, &mut stats, rnorm);
+        // a new solve would start from the undamped cycle again: so does a resumed one
+        w.prepared = false;
+        w.directions = false;
     }
-    stats.relative_residual = rnorm / r0;
-    stats.converged = rnorm <= target && rnorm.is_finite();
+    w.rnorm = *rnorm;
+    stats.relative_residual = *rnorm / w.r0;
+    stats.converged = *rnorm <= target && rnorm.is_finite();
     stats
 }
 
@@ -220,7 +335,13 @@ fn iterate(
     rnorm: &mut f64,
 ) {
     let multigrid = settings.preconditioner == Preconditioner::Multigrid;
-    let mut delta = precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.c);
+    let mut delta = if w.directions {
+        w.delta
+    } else {
+        precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.c)
+    };
+    // the direction and `delta` stay valid for a resumed solve unless the iteration breaks down
+    w.directions = true;
     while stats.iterations < settings.max_iterations {
         if *rnorm <= target {
             break;
@@ -243,6 +364,7 @@ fn iterate(
         };
         if !(cq > 0.0) {
             stats.indefinite = true;
+            w.directions = false;
             break;
         }
         let alpha = delta / cq;
@@ -266,6 +388,7 @@ fn iterate(
         if !(delta_new > 0.0) && *rnorm > target {
             // rᵀ P⁻¹ r ≤ 0 for r ≠ 0: the preconditioner is not positive definite
             stats.bad_preconditioner = true;
+            w.directions = false;
             break;
         }
         let beta = delta_new / delta;
@@ -274,5 +397,9 @@ fn iterate(
             .zip(w.s.par_iter())
             .with_min_len(CHUNK)
             .for_each(|(c, si)| *c = *si + beta * *c);
+    }
+    w.delta = delta;
+    if !(delta > 0.0) {
+        w.directions = false;
     }
 }
