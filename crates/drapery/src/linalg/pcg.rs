@@ -56,7 +56,8 @@ pub struct SolveStats {
     /// Set when the multigrid turned out not positive definite and the solve went on with its
     /// smoothers damped by an upper bound of `ρ(D⁻¹A)` ([`Multigrid::refresh_bounded`]).
     pub bounded_damping: bool,
-    /// Times the preconditioner was set up (multigrid refreshes, the damped one included).
+    /// Times the preconditioner was set up (multigrid refreshes, the damped one included): 0
+    /// when the initial guess already met the tolerance.
     pub setups: usize,
 }
 
@@ -71,17 +72,6 @@ pub struct PcgScratch {
     partial: Vec<f64>,
     pinv: Vec<Mat3>,
     amg: Multigrid,
-    /// Whether the preconditioner is set up for the last solve's matrix and filter.
-    prepared: bool,
-    /// Whether `c` and `delta` hold the last solve's search direction and `rᵀ P⁻¹ r`
-    /// (so that [`resume`] continues the conjugate directions).
-    directions: bool,
-    /// `rᵀ P⁻¹ r` of the last iteration.
-    delta: f64,
-    /// Reference residual `‖S (b - A z)‖` of the last solve.
-    r0: f64,
-    /// `‖r‖` at the last solve's result (`r` is its filtered residual).
-    rnorm: f64,
 }
 
 impl PcgScratch {
@@ -140,96 +130,6 @@ pub fn solve_preconditioned_by(
     settings: &PcgSettings,
     w: &mut PcgScratch,
 ) -> SolveStats {
-    run(a, p, b, s, z, x, settings, w)
-}
-
-/// Continues the previous solve on `w` (by [`solve_preconditioned_by`] or this function, with
-/// the same `a`, `p`, `b`, `s` and `z`) to the tolerance in `settings`, from its result `x`
-/// (unchanged since): the conjugate gradient goes on where it stopped, with the same
-/// preconditioner, so a solve to a loose tolerance followed by this one gives the iterates of
-/// one solve to the tighter tolerance, bit for bit. `settings.max_iterations` counts the
-/// iterations of this call.
-#[allow(clippy::too_many_arguments)]
-pub fn resume(
-    a: &BlockMatrix,
-    p: &BlockMatrix,
-    s: &[Mat3],
-    x: &mut [Vec3],
-    settings: &PcgSettings,
-    w: &mut PcgScratch,
-) -> SolveStats {
-    let mut stats = SolveStats::default();
-    let (r0, mut rnorm) = (w.r0, w.rnorm);
-    if r0 == 0.0 || !r0.is_finite() {
-        stats.relative_residual = if r0 == 0.0 { 0.0 } else { f64::NAN };
-        stats.converged = r0 == 0.0;
-        return stats;
-    }
-    let target = settings.tolerance * r0;
-    if rnorm <= target {
-        stats.relative_residual = rnorm / r0;
-        stats.converged = true;
-        return stats;
-    }
-    if !w.prepared {
-        prepare(p, s, settings, w, &mut stats);
-    }
-    let filtered_product = settings.preconditioner == Preconditioner::Multigrid && std::ptr::eq(a, p);
-    finish(a, p, s, x, settings, w, target, filtered_product, stats, &mut rnorm)
-}
-
-/// Sets up the preconditioner for `p` filtered by `s`.
-fn prepare(
-    p: &BlockMatrix,
-    s: &[Mat3],
-    settings: &PcgSettings,
-    w: &mut PcgScratch,
-    stats: &mut SolveStats,
-) {
-    stats.setups += 1;
-    let n = p.n();
-    if settings.preconditioner == Preconditioner::Multigrid {
-        w.amg.refresh(p, s);
-    } else {
-        w.pinv.resize(n, Mat3::IDENTITY);
-        w.pinv
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(1024)
-            .for_each(|(i, pi)| {
-                let d = p.values[p.diag_index(i)];
-                *pi = match settings.preconditioner {
-                    Preconditioner::Identity | Preconditioner::Multigrid => Mat3::IDENTITY,
-                    Preconditioner::Jacobi => Mat3::from_diagonal(Vec3::new(
-                        1.0 / d.x_axis.x,
-                        1.0 / d.y_axis.y,
-                        1.0 / d.z_axis.z,
-                    )),
-                    Preconditioner::BlockJacobi => {
-                        let inv = d.inverse();
-                        if inv.is_finite() { inv } else { Mat3::IDENTITY }
-                    }
-                };
-            });
-    }
-    w.prepared = true;
-}
-
-/// The solve of [`solve_preconditioned_by`]. The preconditioner is only set up once an iteration is needed: an
-/// initial guess that already meets the tolerance costs no multigrid refresh (unless the
-/// refresh would build the hierarchy's structure from `p`'s values, which must not be
-/// postponed).
-#[allow(clippy::too_many_arguments)]
-fn run(
-    a: &BlockMatrix,
-    p: &BlockMatrix,
-    b: &[Vec3],
-    s: &[Mat3],
-    z: &[Vec3],
-    x: &mut [Vec3],
-    settings: &PcgSettings,
-    w: &mut PcgScratch,
-) -> SolveStats {
     let n = a.n();
     debug_assert_eq!(p.n(), n);
     for v in [&mut w.r, &mut w.c, &mut w.q, &mut w.s] {
@@ -238,11 +138,16 @@ fn run(
     let multigrid = settings.preconditioner == Preconditioner::Multigrid;
     // the multigrid holds the filtered `p` in half the bytes: the product's matrix when `p` is `a`
     let filtered_product = multigrid && std::ptr::eq(a, p);
-    w.prepared = false;
-    w.directions = false;
+    // The preconditioner is set up only once an iteration is needed: an initial guess that
+    // already meets the tolerance (the obstacle active set's last round, say, when it only
+    // released contacts with tiny impulses) costs no multigrid refresh. Unless the refresh
+    // would build the hierarchy's structure from `p`'s own values, which must not depend on
+    // which solve happens to come first.
     let mut stats = SolveStats::default();
-    if !w.prepared && multigrid && w.amg.builds_from(p) {
+    let mut prepared = false;
+    if multigrid && w.amg.builds_from(p) {
         prepare(p, s, settings, w, &mut stats);
+        prepared = true;
     }
     // Reference residual: the zero guess on the free part.
     a.mul_vec(z, &mut w.q);
@@ -250,7 +155,6 @@ fn run(
         w.r[i] = s[i] * (b[i] - w.q[i]);
     }
     let r0 = dot(&w.r, &w.r).sqrt();
-    (w.r0, w.rnorm) = (r0, 0.0);
     // x = z + S x_guess
     for i in 0..n {
         x[i] = z[i] + s[i] * x[i];
@@ -269,38 +173,19 @@ fn run(
     }
     let target = settings.tolerance * r0;
     let mut rnorm = dot(&w.r, &w.r).sqrt();
-    w.rnorm = rnorm;
     if rnorm <= target {
         stats.relative_residual = rnorm / r0;
         stats.converged = true;
         return stats;
     }
-    if !w.prepared {
+    if !prepared {
         prepare(p, s, settings, w, &mut stats);
     }
-    finish(a, p, s, x, settings, w, target, filtered_product, stats, &mut rnorm)
-}
-
-/// The iterations of a solve whose preconditioner is set up (continuing the kept conjugate
-/// directions when `w.directions` says so), and the stats.
-#[allow(clippy::too_many_arguments)]
-fn finish(
-    a: &BlockMatrix,
-    p: &BlockMatrix,
-    s: &[Mat3],
-    x: &mut [Vec3],
-    settings: &PcgSettings,
-    w: &mut PcgScratch,
-    target: f64,
-    filtered_product: bool,
-    mut stats: SolveStats,
-    rnorm: &mut f64,
-) -> SolveStats {
     let mut run = |w: &mut PcgScratch, stats: &mut SolveStats, rnorm: &mut f64| {
         iterate(a, s, x, settings, w, target, filtered_product, stats, rnorm)
     };
-    run(w, &mut stats, rnorm);
-    if stats.bad_preconditioner && settings.preconditioner == Preconditioner::Multigrid {
+    run(w, &mut stats, &mut rnorm);
+    if stats.bad_preconditioner && multigrid {
         // The cycle was not positive definite (a power estimate of ρ(D⁻¹A) far below ρ leaves
         // ω ρ ≥ 2): damp its smoothers by an upper bound of ρ instead, and restart the
         // conjugate directions from the current iterate.
@@ -308,16 +193,46 @@ fn finish(
         stats.setups += 1;
         stats.bad_preconditioner = false;
         stats.bounded_damping = true;
-        w.directions = false;
-        run(w, &mut stats, rnorm);
-        // a new solve would start from the undamped cycle again: so does a resumed one
-        w.prepared = false;
-        w.directions = false;
+        run(w, &mut stats, &mut rnorm);
     }
-    w.rnorm = *rnorm;
-    stats.relative_residual = *rnorm / w.r0;
-    stats.converged = *rnorm <= target && rnorm.is_finite();
+    stats.relative_residual = rnorm / r0;
+    stats.converged = rnorm <= target && rnorm.is_finite();
     stats
+}
+
+/// Sets up the preconditioner for `p` filtered by `s`.
+fn prepare(
+    p: &BlockMatrix,
+    s: &[Mat3],
+    settings: &PcgSettings,
+    w: &mut PcgScratch,
+    stats: &mut SolveStats,
+) {
+    stats.setups += 1;
+    if settings.preconditioner == Preconditioner::Multigrid {
+        w.amg.refresh(p, s);
+        return;
+    }
+    w.pinv.resize(p.n(), Mat3::IDENTITY);
+    w.pinv
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(1024)
+        .for_each(|(i, pi)| {
+            let d = p.values[p.diag_index(i)];
+            *pi = match settings.preconditioner {
+                Preconditioner::Identity | Preconditioner::Multigrid => Mat3::IDENTITY,
+                Preconditioner::Jacobi => Mat3::from_diagonal(Vec3::new(
+                    1.0 / d.x_axis.x,
+                    1.0 / d.y_axis.y,
+                    1.0 / d.z_axis.z,
+                )),
+                Preconditioner::BlockJacobi => {
+                    let inv = d.inverse();
+                    if inv.is_finite() { inv } else { Mat3::IDENTITY }
+                }
+            };
+        });
 }
 
 /// CG iterations from `x` (with `w.r` its filtered residual) until `‖r‖ ≤ target`, the
@@ -335,13 +250,7 @@ fn iterate(
     rnorm: &mut f64,
 ) {
     let multigrid = settings.preconditioner == Preconditioner::Multigrid;
-    let mut delta = if w.directions {
-        w.delta
-    } else {
-        precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.c)
-    };
-    // the direction and `delta` stay valid for a resumed solve unless the iteration breaks down
-    w.directions = true;
+    let mut delta = precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.c);
     while stats.iterations < settings.max_iterations {
         if *rnorm <= target {
             break;
@@ -364,7 +273,6 @@ fn iterate(
         };
         if !(cq > 0.0) {
             stats.indefinite = true;
-            w.directions = false;
             break;
         }
         let alpha = delta / cq;
@@ -388,7 +296,6 @@ fn iterate(
         if !(delta_new > 0.0) && *rnorm > target {
             // rᵀ P⁻¹ r ≤ 0 for r ≠ 0: the preconditioner is not positive definite
             stats.bad_preconditioner = true;
-            w.directions = false;
             break;
         }
         let beta = delta_new / delta;
@@ -398,8 +305,58 @@ fn iterate(
             .with_min_len(CHUNK)
             .for_each(|(c, si)| *c = *si + beta * *c);
     }
-    w.delta = delta;
-    if !(delta > 0.0) {
-        w.directions = false;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A chain of `n` particles with springs of stiffness `k` between neighbours and mass `m`:
+    /// `m I + k L` (symmetric positive definite).
+    fn chain(n: usize, k: f64, m: f64) -> BlockMatrix {
+        let pairs: Vec<(u32, u32)> = (1..n as u32).map(|i| (i - 1, i)).collect();
+        let mut a = BlockMatrix::from_pairs(n, &pairs);
+        for i in 0..n {
+            let neighbours = (i > 0) as usize + (i + 1 < n) as usize;
+            a.add(i, i, Mat3::from_diagonal(Vec3::splat(m + k * neighbours as f64)));
+            if i + 1 < n {
+                a.add(i, i + 1, Mat3::from_diagonal(Vec3::splat(-k)));
+                a.add(i + 1, i, Mat3::from_diagonal(Vec3::splat(-k)));
+            }
+        }
+        a
+    }
+
+    #[test]
+    fn a_guess_that_meets_the_tolerance_costs_no_refresh_and_leaves_no_trace() {
+        let n = 400;
+        let a = chain(n, 100.0, 1.0);
+        let s = vec![Mat3::IDENTITY; n];
+        let z = vec![Vec3::ZERO; n];
+        let settings = PcgSettings {
+            tolerance: 1e-8,
+            max_iterations: 500,
+            preconditioner: Preconditioner::Multigrid,
+        };
+        let b1: Vec<Vec3> = (0..n).map(|i| Vec3::new(1.0, (i % 7) as f64, -2.0)).collect();
+        let b2: Vec<Vec3> = (0..n).map(|i| Vec3::new((i % 5) as f64, 0.5, 1.0)).collect();
+        let (mut w, mut fresh) = (PcgScratch::default(), PcgScratch::default());
+        let mut x1 = vec![Vec3::ZERO; n];
+        let first = solve(&a, &b1, &s, &z, &mut x1, &settings, &mut w);
+        assert!(first.converged && first.iterations > 0 && first.setups == 1);
+        // the solution as the guess: nothing to do, no refresh, the guess back unchanged
+        let mut again = x1.clone();
+        let st = solve(&a, &b1, &s, &z, &mut again, &settings, &mut w);
+        assert!(st.converged && st.iterations == 0 && st.setups == 0);
+        assert!(st.relative_residual <= settings.tolerance);
+        assert_eq!(again, x1);
+        // the next solve gives the bits of a scratch that never skipped a refresh
+        let mut y = vec![Vec3::ZERO; n];
+        solve(&a, &b1, &s, &z, &mut y, &settings, &mut fresh);
+        let (mut x2, mut y2) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+        let st = solve(&a, &b2, &s, &z, &mut x2, &settings, &mut w);
+        let st_fresh = solve(&a, &b2, &s, &z, &mut y2, &settings, &mut fresh);
+        assert!(st.converged && st.setups == 1);
+        assert_eq!((x2, st.iterations), (y2, st_fresh.iterations));
     }
 }

@@ -2,19 +2,12 @@
 //! obstacle active set (docs/MATH.md §5, §11, §14).
 //!
 //! Each round sets the constraints (pins, then the held obstacle contacts), solves, and lets
-//! the [`ActiveSet`] release contacts that pull and hold again released ones that sink, each
-//! solve from the previous one's solution. Before the first solve of a step, contacts the
-//! initial guess (the previous step's velocity change) says would pull while their particle
-//! leaves the surface anyway are released up front.
-//!
-//! With PCG, the rounds first solve to [`LOOSE`] times the tolerance (at most [`LOOSE_ROUNDS`]
-//! of them): they only look for the set, and most contacts that flip, flip there. Once the set
-//! settles on a loose solve, that solve's conjugate gradient goes on to the tolerance
-//! (`pcg::resume`, the same iterates as one solve to the tolerance), and the rounds go on at
-//! the tolerance until the set settles there too, at most [`CONTACT_ROUNDS`] of them. So the
-//! set a step keeps is one that a solve to the tolerance does not change, as before; only the
-//! way to it is cheaper (docs/ROUNDING.md). The last round keeps the contact set its solve
-//! used, so friction gets contacts that match the velocities they come with.
+//! the [`ActiveSet`] release contacts that pull and hold again released ones that sink; at most
+//! [`CONTACT_ROUNDS`] solves per iteration, each from the previous one's solution. Before the
+//! first solve of a step, contacts the initial guess (the previous step's velocity change) says
+//! would pull while their particle leaves the surface anyway are released up front. The last
+//! round keeps the contact set its solve used, so friction gets contacts that match the
+//! velocities they come with.
 
 use super::report::{StepReport, timed};
 use super::settings::{LinearSolver, SolverSettings};
@@ -27,22 +20,10 @@ use crate::linalg::pcg::{self, PcgScratch, PcgSettings};
 use crate::math::Vec3;
 use rayon::prelude::*;
 
-/// Linear solves to the tolerance per Newton iteration at most (after at most [`LOOSE_ROUNDS`]
-/// loose ones). The rounds stop as soon as the active set stops changing (the pile's first
-/// contact steps take 4 to 8); a cap of 2 left contacts that pull hard held at the end of the
-/// step, and which ones depended on rounding (docs/ROUNDING.md).
+/// Linear solves per Newton iteration at most. The rounds stop as soon as the active set stops
+/// changing (the pile's first contact steps take 4 to 8); a cap of 2 left contacts that pull hard held
+/// at the end of the step, and which ones depended on rounding (docs/ROUNDING.md).
 pub(crate) const CONTACT_ROUNDS: usize = 8;
-
-/// The rounds before the active set settles solve to this multiple of the PCG tolerance (but
-/// never looser than [`MAX_LOOSE`]). On spin-129 (BENCHMARKS.md, tenth session) 10 took the
-/// fewest iterations; 3 and 30 more.
-const LOOSE: f64 = 10.0;
-
-/// The loosest relative residual of a loose round.
-const MAX_LOOSE: f64 = 0.1;
-
-/// Loose rounds at most; then the rounds solve to the tolerance.
-const LOOSE_ROUNDS: usize = 4;
 
 /// Particles per task in the per-particle parallel loops.
 const PARTICLES: usize = 1024;
@@ -116,65 +97,35 @@ pub(crate) fn on_active_set(
         r,
     } = s;
     let (v, rhs, it) = (p.v, p.rhs, p.iteration);
-    // PCG solves the rounds before the set settles to a looser tolerance; the direct solver
-    // and a step without contacts have one accuracy only
-    let loose = settings.tolerance.max((LOOSE * settings.tolerance).min(MAX_LOOSE));
-    let mut tight = settings.linear_solver == LinearSolver::Direct
-        || set.is_empty()
-        || loose <= settings.tolerance;
-    // the set settled on a loose solve: its conjugate gradient goes on to the tolerance
-    let mut resume = false;
-    let (mut loose_rounds, mut tight_rounds) = (0, 0);
-    loop {
-        let first = loose_rounds + tight_rounds == 0;
-        if !resume {
-            timed(&mut report.stages.constrain, || {
-                pins::apply(p.pinned, p.pins, v, c);
-                if first {
-                    // initial guess: the previous step's change, then the previous round's
-                    // solution (only the contacts that changed differ)
-                    dv.par_iter_mut()
-                        .enumerate()
-                        .with_min_len(PARTICLES)
-                        .for_each(|(i, d)| {
-                            *d = if it == 0 {
-                                p.warm.get(i).copied().unwrap_or(Vec3::ZERO)
-                            } else {
-                                Vec3::ZERO
-                            };
-                        });
-                }
-                set.hold(v, c);
-                if first && it == 0 && !set.is_empty() {
-                    set.predict(system.matrix(), rhs, v, dv, c, w, r);
-                }
-            });
-        }
+    for round in 0..CONTACT_ROUNDS {
+        timed(&mut report.stages.constrain, || {
+            pins::apply(p.pinned, p.pins, v, c);
+            if round == 0 {
+                // initial guess: the previous step's change, then the previous round's
+                // solution (only the contacts that changed differ)
+                dv.par_iter_mut()
+                    .enumerate()
+                    .with_min_len(PARTICLES)
+                    .for_each(|(i, d)| {
+                        *d = if it == 0 {
+                            p.warm.get(i).copied().unwrap_or(Vec3::ZERO)
+                        } else {
+                            Vec3::ZERO
+                        };
+                    });
+            }
+            set.hold(v, c);
+            if round == 0 && it == 0 && !set.is_empty() {
+                set.predict(system.matrix(), rhs, v, dv, c, w, r);
+            }
+        });
         let t = std::time::Instant::now();
         report.linear_solves += 1;
-        let tolerance = if tight {
-            tight_rounds += 1;
-            settings.tolerance
-        } else {
-            loose_rounds += 1;
-            loose
-        };
-        let solve = Linear {
-            rhs,
-            tolerance,
-            resume,
-            iteration: it,
-        };
-        linear(system, solvers, settings, &solve, c, dv, report)?;
-        let mut done = set.is_empty() || tight_rounds == CONTACT_ROUNDS;
-        resume = false;
+        linear(system, solvers, settings, rhs, c, dv, it, report)?;
+        let mut done = set.is_empty();
         if !done {
             set.measure(system.matrix(), rhs, dv, r);
-            let changed = set.update(v, dv, p.sink_tolerance);
-            // settled on a tight solve: done; on a loose one: go on to the tolerance
-            done = tight && !changed;
-            resume = !tight && !changed;
-            tight |= !changed || loose_rounds == LOOSE_ROUNDS;
+            done = round + 1 == CONTACT_ROUNDS || !set.update(v, dv, p.sink_tolerance);
         }
         report.stages.solve += t.elapsed().as_secs_f64();
         if done {
@@ -184,45 +135,35 @@ pub(crate) fn on_active_set(
     Ok(())
 }
 
-/// One linear solve's inputs besides the system and its constraints.
-pub(crate) struct Linear<'a> {
-    /// Right-hand side.
-    pub rhs: &'a [Vec3],
-    /// PCG's relative tolerance.
-    pub tolerance: f64,
-    /// The same system and constraints as the previous solve, whose solution `dv` holds: PCG
-    /// continues that solve.
-    pub resume: bool,
-    /// Newton iteration, from 0 (for the error message).
-    pub iteration: u32,
-}
-
 /// One linear solve with the constraints `c` into `dv` (its initial guess on entry).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn linear(
     system: &System,
     solvers: &mut Solvers,
     settings: &SolverSettings,
-    l: &Linear,
+    rhs: &[Vec3],
     c: &Constraints,
     dv: &mut [Vec3],
+    it: u32,
     report: &mut StepReport,
 ) -> Result<(), String> {
-    let (rhs, it) = (l.rhs, l.iteration);
     match settings.linear_solver {
         LinearSolver::Pcg => {
             let pcg_settings = PcgSettings {
-                tolerance: l.tolerance,
+                tolerance: settings.tolerance,
                 max_iterations: settings.max_iterations,
                 preconditioner: settings.preconditioner,
             };
-            let (a, p, s) = (system.matrix(), system.preconditioner(), &c.filter);
-            let stats = if l.resume {
-                pcg::resume(a, p, s, dv, &pcg_settings, &mut solvers.pcg)
-            } else {
-                let w = &mut solvers.pcg;
-                pcg::solve_preconditioned_by(a, p, rhs, s, &c.z, dv, &pcg_settings, w)
-            };
+            let stats = pcg::solve_preconditioned_by(
+                system.matrix(),
+                system.preconditioner(),
+                rhs,
+                &c.filter,
+                &c.z,
+                dv,
+                &pcg_settings,
+                &mut solvers.pcg,
+            );
             report.cg_iterations += stats.iterations;
             report.preconditioner_setups += stats.setups;
             report.residual = stats.relative_residual;
@@ -239,7 +180,7 @@ pub(crate) fn linear(
                     it + 1,
                     stats.iterations,
                     stats.relative_residual,
-                    l.tolerance
+                    settings.tolerance
                 ));
             }
         }
