@@ -289,7 +289,10 @@ impl Multigrid {
     /// would change the hierarchy.
     pub fn builds_from(&self, a: &BlockMatrix) -> bool {
         self.levels.first().is_none_or(|l| !l.a.same_pattern(a))
-            && self.reference.as_ref().is_none_or(|(r, _)| !r.same_pattern(a))
+            && self
+                .reference
+                .as_ref()
+                .is_none_or(|(r, _)| !r.same_pattern(a))
     }
 
     /// Forgets the structure: the next refresh rebuilds it from the values it is given.

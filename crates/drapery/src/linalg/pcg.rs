@@ -318,7 +318,11 @@ mod tests {
         let mut a = BlockMatrix::from_pairs(n, &pairs);
         for i in 0..n {
             let neighbours = (i > 0) as usize + (i + 1 < n) as usize;
-            a.add(i, i, Mat3::from_diagonal(Vec3::splat(m + k * neighbours as f64)));
+            a.add(
+                i,
+                i,
+                Mat3::from_diagonal(Vec3::splat(m + k * neighbours as f64)),
+            );
             if i + 1 < n {
                 a.add(i, i + 1, Mat3::from_diagonal(Vec3::splat(-k)));
                 a.add(i + 1, i, Mat3::from_diagonal(Vec3::splat(-k)));
@@ -338,8 +342,12 @@ mod tests {
             max_iterations: 500,
             preconditioner: Preconditioner::Multigrid,
         };
-        let b1: Vec<Vec3> = (0..n).map(|i| Vec3::new(1.0, (i % 7) as f64, -2.0)).collect();
-        let b2: Vec<Vec3> = (0..n).map(|i| Vec3::new((i % 5) as f64, 0.5, 1.0)).collect();
+        let b1: Vec<Vec3> = (0..n)
+            .map(|i| Vec3::new(1.0, (i % 7) as f64, -2.0))
+            .collect();
+        let b2: Vec<Vec3> = (0..n)
+            .map(|i| Vec3::new((i % 5) as f64, 0.5, 1.0))
+            .collect();
         let (mut w, mut fresh) = (PcgScratch::default(), PcgScratch::default());
         let mut x1 = vec![Vec3::ZERO; n];
         let first = solve(&a, &b1, &s, &z, &mut x1, &settings, &mut w);
