@@ -147,9 +147,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let (mut sim, h, _) = simulation(n, free)?;
             sim.restore_snapshot(&Snapshot::from_bytes(&std::fs::read(file)?)?)?;
             println!(
-                "step newton solves cg cg/solve held stencils prox_pairs bp_builds ccd_pairs ccd_rounds ccd_hits"
+                "step newton solves cg cg/solve held stencils prox_pairs bp_builds ccd_pairs ccd_rounds ccd_hits setups"
             );
-            let mut sum = [0usize; 10];
+            let mut sum = [0usize; 11];
             for k in 0..count {
                 let r = sim.step(h)?;
                 let row = [
@@ -163,14 +163,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     r.ccd_candidates,
                     r.ccd_rounds,
                     r.ccd_hits,
+                    r.preconditioner_setups,
                 ];
                 for (s, x) in sum.iter_mut().zip(row) {
                     *s += x;
                 }
                 let per_solve = r.cg_iterations as f64 / r.linear_solves.max(1) as f64;
                 println!(
-                    "{k} {} {} {} {per_solve:.1} {} {} {} {} {} {} {}",
-                    row[0], row[1], row[2], row[3], row[4], row[5], row[6], row[7], row[8], row[9]
+                    "{k} {} {} {} {per_solve:.1} {} {} {} {} {} {} {} {}",
+                    row[0],
+                    row[1],
+                    row[2],
+                    row[3],
+                    row[4],
+                    row[5],
+                    row[6],
+                    row[7],
+                    row[8],
+                    row[9],
+                    row[10]
                 );
             }
             let m: Vec<String> = sum

@@ -284,6 +284,17 @@ impl Multigrid {
         }
     }
 
+    /// Whether a refresh for `a` would build the structure from `a`'s own values (no structure
+    /// for its pattern yet, and no reference with that pattern): then postponing the refresh
+    /// would change the hierarchy.
+    pub fn builds_from(&self, a: &BlockMatrix) -> bool {
+        self.levels.first().is_none_or(|l| !l.a.same_pattern(a))
+            && self
+                .reference
+                .as_ref()
+                .is_none_or(|(r, _)| !r.same_pattern(a))
+    }
+
     /// Forgets the structure: the next refresh rebuilds it from the values it is given.
     pub fn reset(&mut self) {
         self.levels.clear();

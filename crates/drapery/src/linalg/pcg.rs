@@ -56,6 +56,9 @@ pub struct SolveStats {
     /// Set when the multigrid turned out not positive definite and the solve went on with its
     /// smoothers damped by an upper bound of `ρ(D⁻¹A)` ([`Multigrid::refresh_bounded`]).
     pub bounded_damping: bool,
+    /// Times the preconditioner was set up (multigrid refreshes, the damped one included): 0
+    /// when the initial guess already met the tolerance.
+    pub setups: usize,
 }
 
 /// Reusable work vectors.
@@ -135,29 +138,16 @@ pub fn solve_preconditioned_by(
     let multigrid = settings.preconditioner == Preconditioner::Multigrid;
     // the multigrid holds the filtered `p` in half the bytes: the product's matrix when `p` is `a`
     let filtered_product = multigrid && std::ptr::eq(a, p);
-    if multigrid {
-        w.amg.refresh(p, s);
-    } else {
-        w.pinv.resize(n, Mat3::IDENTITY);
-        w.pinv
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(1024)
-            .for_each(|(i, pi)| {
-                let d = p.values[p.diag_index(i)];
-                *pi = match settings.preconditioner {
-                    Preconditioner::Identity | Preconditioner::Multigrid => Mat3::IDENTITY,
-                    Preconditioner::Jacobi => Mat3::from_diagonal(Vec3::new(
-                        1.0 / d.x_axis.x,
-                        1.0 / d.y_axis.y,
-                        1.0 / d.z_axis.z,
-                    )),
-                    Preconditioner::BlockJacobi => {
-                        let inv = d.inverse();
-                        if inv.is_finite() { inv } else { Mat3::IDENTITY }
-                    }
-                };
-            });
+    // The preconditioner is set up only once an iteration is needed: an initial guess that
+    // already meets the tolerance (the obstacle active set's last round, say, when it only
+    // released contacts with tiny impulses) costs no multigrid refresh. Unless the refresh
+    // would build the hierarchy's structure from `p`'s own values, which must not depend on
+    // which solve happens to come first.
+    let mut stats = SolveStats::default();
+    let mut prepared = false;
+    if multigrid && w.amg.builds_from(p) {
+        prepare(p, s, settings, w, &mut stats);
+        prepared = true;
     }
     // Reference residual: the zero guess on the free part.
     a.mul_vec(z, &mut w.q);
@@ -173,20 +163,24 @@ pub fn solve_preconditioned_by(
         for i in 0..n {
             x[i] = z[i];
         }
-        return SolveStats {
-            iterations: 0,
-            relative_residual: if r0 == 0.0 { 0.0 } else { f64::NAN },
-            converged: r0 == 0.0,
-            ..SolveStats::default()
-        };
+        stats.relative_residual = if r0 == 0.0 { 0.0 } else { f64::NAN };
+        stats.converged = r0 == 0.0;
+        return stats;
     }
     a.mul_vec(x, &mut w.q);
     for i in 0..n {
         w.r[i] = s[i] * (b[i] - w.q[i]);
     }
     let target = settings.tolerance * r0;
-    let mut stats = SolveStats::default();
     let mut rnorm = dot(&w.r, &w.r).sqrt();
+    if rnorm <= target {
+        stats.relative_residual = rnorm / r0;
+        stats.converged = true;
+        return stats;
+    }
+    if !prepared {
+        prepare(p, s, settings, w, &mut stats);
+    }
     let mut run = |w: &mut PcgScratch, stats: &mut SolveStats, rnorm: &mut f64| {
         iterate(a, s, x, settings, w, target, filtered_product, stats, rnorm)
     };
@@ -196,6 +190,7 @@ pub fn solve_preconditioned_by(
         // ω ρ ≥ 2): damp its smoothers by an upper bound of ρ instead, and restart the
         // conjugate directions from the current iterate.
         w.amg.refresh_bounded(p, s);
+        stats.setups += 1;
         stats.bad_preconditioner = false;
         stats.bounded_damping = true;
         run(w, &mut stats, &mut rnorm);
@@ -203,6 +198,41 @@ pub fn solve_preconditioned_by(
     stats.relative_residual = rnorm / r0;
     stats.converged = rnorm <= target && rnorm.is_finite();
     stats
+}
+
+/// Sets up the preconditioner for `p` filtered by `s`.
+fn prepare(
+    p: &BlockMatrix,
+    s: &[Mat3],
+    settings: &PcgSettings,
+    w: &mut PcgScratch,
+    stats: &mut SolveStats,
+) {
+    stats.setups += 1;
+    if settings.preconditioner == Preconditioner::Multigrid {
+        w.amg.refresh(p, s);
+        return;
+    }
+    w.pinv.resize(p.n(), Mat3::IDENTITY);
+    w.pinv
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(1024)
+        .for_each(|(i, pi)| {
+            let d = p.values[p.diag_index(i)];
+            *pi = match settings.preconditioner {
+                Preconditioner::Identity | Preconditioner::Multigrid => Mat3::IDENTITY,
+                Preconditioner::Jacobi => Mat3::from_diagonal(Vec3::new(
+                    1.0 / d.x_axis.x,
+                    1.0 / d.y_axis.y,
+                    1.0 / d.z_axis.z,
+                )),
+                Preconditioner::BlockJacobi => {
+                    let inv = d.inverse();
+                    if inv.is_finite() { inv } else { Mat3::IDENTITY }
+                }
+            };
+        });
 }
 
 /// CG iterations from `x` (with `w.r` its filtered residual) until `‖r‖ ≤ target`, the
@@ -274,5 +304,67 @@ fn iterate(
             .zip(w.s.par_iter())
             .with_min_len(CHUNK)
             .for_each(|(c, si)| *c = *si + beta * *c);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A chain of `n` particles with springs of stiffness `k` between neighbours and mass `m`:
+    /// `m I + k L` (symmetric positive definite).
+    fn chain(n: usize, k: f64, m: f64) -> BlockMatrix {
+        let pairs: Vec<(u32, u32)> = (1..n as u32).map(|i| (i - 1, i)).collect();
+        let mut a = BlockMatrix::from_pairs(n, &pairs);
+        for i in 0..n {
+            let neighbours = (i > 0) as usize + (i + 1 < n) as usize;
+            a.add(
+                i,
+                i,
+                Mat3::from_diagonal(Vec3::splat(m + k * neighbours as f64)),
+            );
+            if i + 1 < n {
+                a.add(i, i + 1, Mat3::from_diagonal(Vec3::splat(-k)));
+                a.add(i + 1, i, Mat3::from_diagonal(Vec3::splat(-k)));
+            }
+        }
+        a
+    }
+
+    #[test]
+    fn a_guess_that_meets_the_tolerance_costs_no_refresh_and_leaves_no_trace() {
+        let n = 400;
+        let a = chain(n, 100.0, 1.0);
+        let s = vec![Mat3::IDENTITY; n];
+        let z = vec![Vec3::ZERO; n];
+        let settings = PcgSettings {
+            tolerance: 1e-8,
+            max_iterations: 500,
+            preconditioner: Preconditioner::Multigrid,
+        };
+        let b1: Vec<Vec3> = (0..n)
+            .map(|i| Vec3::new(1.0, (i % 7) as f64, -2.0))
+            .collect();
+        let b2: Vec<Vec3> = (0..n)
+            .map(|i| Vec3::new((i % 5) as f64, 0.5, 1.0))
+            .collect();
+        let (mut w, mut fresh) = (PcgScratch::default(), PcgScratch::default());
+        let mut x1 = vec![Vec3::ZERO; n];
+        let first = solve(&a, &b1, &s, &z, &mut x1, &settings, &mut w);
+        assert!(first.converged && first.iterations > 0 && first.setups == 1);
+        // the solution as the guess: nothing to do, no refresh, the guess back unchanged
+        let mut again = x1.clone();
+        let st = solve(&a, &b1, &s, &z, &mut again, &settings, &mut w);
+        assert!(st.converged && st.iterations == 0 && st.setups == 0);
+        assert!(st.relative_residual <= settings.tolerance);
+        assert_eq!(again, x1);
+        // the next solve gives the bits of a scratch that never skipped a refresh
+        let mut y = vec![Vec3::ZERO; n];
+        solve(&a, &b1, &s, &z, &mut y, &settings, &mut fresh);
+        let (mut x2, mut y2) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+        let st = solve(&a, &b2, &s, &z, &mut x2, &settings, &mut w);
+        let st_fresh = solve(&a, &b2, &s, &z, &mut y2, &settings, &mut fresh);
+        assert!(st.converged && st.setups == 1);
+        assert_eq!((x2, st.iterations), (y2, st_fresh.iterations));
     }
 }

@@ -57,6 +57,10 @@ pub struct StepReport {
     pub cg_iterations: usize,
     /// Linear solves (more than one per Newton iteration when contacts were released).
     pub linear_solves: usize,
+    /// Preconditioner set-ups (multigrid refreshes) over the linear solves: a solve whose
+    /// initial guess already met the tolerance, or that only tightened the previous one's
+    /// solution, needs none.
+    pub preconditioner_setups: usize,
     /// Final relative residual of the last PCG solve (0 with the direct solver).
     pub residual: f64,
     /// Seconds spent assembling forces and matrices (the linearize stage).

@@ -165,6 +165,7 @@ pub(crate) fn linear(
                 &mut solvers.pcg,
             );
             report.cg_iterations += stats.iterations;
+            report.preconditioner_setups += stats.setups;
             report.residual = stats.relative_residual;
             if !stats.converged {
                 let why = if stats.indefinite {
