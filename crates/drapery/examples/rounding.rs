@@ -11,8 +11,10 @@
 //! Options (docs/ROUNDING.md, "Physics or artefact"):
 //! * `--sub K`: K steps of h = 1/(60 K) s per frame (default 1);
 //! * `--direct`: the direct linear solver instead of PCG (the tolerance is then unused);
-//! * `--scene pile|pile-noself|free|pinch`: the pile (default); the pile without
-//!   self-collision (the ground only); the pile's cloth falling without any collision; `pinch`:
+//! * `--scene pile|pile-noself|pile-shell|free|pinch`: the pile (default); the pile without
+//!   self-collision (the ground only); the pile on the shell model (docs/MATH.md §20, 21:
+//!   stretch modulus 1000 N/m, Poisson 0, bending rigidity `--bend B` N·m, default 1e-3); the
+//!   pile's cloth falling without any collision; `pinch`:
 //!   the same cloth horizontal, no gravity, no collision, its edges x = ±0.5 m moving toward
 //!   each other at 0.75 m/s each (1.5 m/s closing, the pile's impact speed);
 //! * `--seed S`: every run's positions first moved by S m in another fixed pseudo-random
@@ -27,15 +29,16 @@
 use drapery::animation::Motion;
 use drapery::collision::settings::CollisionSettings;
 use drapery::constraints::handles::HandleDesc;
-use drapery::model::SpringKind;
+use drapery::model::{ClothModel, Shell, SpringKind};
 use drapery::presets::Preset;
-use drapery::{ClothDesc, LinearSolver, Model, Simulation, SolverSettings, Vec3};
+use drapery::{ClothDesc, LinearSolver, Material, Model, Simulation, SolverSettings, Vec3};
 
 fn main() -> drapery::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let n: usize = args[0].parse().unwrap();
     let frames: usize = args[1].parse().unwrap();
     let (mut sub, mut direct, mut scene, mut seed, mut every) = (1usize, false, "pile", 0.0, false);
+    let mut bend = 1e-3;
     let mut rest = args[2..].iter();
     let mut runs: Vec<(f64, f64)> = Vec::new();
     while let Some(a) = rest.next() {
@@ -45,6 +48,7 @@ fn main() -> drapery::Result<()> {
             "--scene" => scene = rest.next().unwrap().as_str(),
             "--seed" => seed = rest.next().unwrap().parse().unwrap(),
             "--every" => every = true,
+            "--bend" => bend = rest.next().unwrap().parse().unwrap(),
             _ => runs.push(match a.split_once('p') {
                 Some(("", p)) => (1e-3, p.parse().unwrap()),
                 Some((t, p)) => (t.parse().unwrap(), p.parse().unwrap()),
@@ -65,7 +69,7 @@ fn main() -> drapery::Result<()> {
             },
             ..Default::default()
         };
-        let mut sim = Simulation::new(model(scene, n)?, settings)?;
+        let mut sim = Simulation::new(model(scene, n, bend)?, settings)?;
         let x: Vec<Vec3> = sim
             .positions()
             .iter()
@@ -146,7 +150,7 @@ fn main() -> drapery::Result<()> {
 }
 
 /// The scene's model (see the module doc).
-fn model(scene: &str, n: usize) -> drapery::Result<Model> {
+fn model(scene: &str, n: usize, bend: f64) -> drapery::Result<Model> {
     let pile = Preset::Pile.model(n)?;
     let c = &pile.cloths()[0];
     let mut cloth = ClothDesc {
@@ -169,6 +173,22 @@ fn model(scene: &str, n: usize) -> drapery::Result<Model> {
             Model::new(vec![cloth], pile.gravity())?.with_collisions(settings, obstacles)
         }
         "free" => Model::new(vec![cloth], pile.gravity()),
+        "pile-shell" => {
+            cloth.material = Material {
+                model: ClothModel::Shell,
+                shell: Shell {
+                    stretch_modulus: [1000.0, 1000.0],
+                    poisson: 0.0,
+                    shear_modulus: None,
+                    bending_rigidity: [bend, bend],
+                    damping: 0.0,
+                },
+                ..cloth.material
+            };
+            let obstacles = pile.obstacles().to_vec();
+            Model::new(vec![cloth], pile.gravity())?
+                .with_collisions(pile.collision().unwrap().clone(), obstacles)
+        }
         "pinch" => {
             let mesh = drapery::Mesh::grid([1.0, 1.0], [n, n], Vec3::ZERO, Vec3::Y)?;
             let edge = |side: f64| HandleDesc {
