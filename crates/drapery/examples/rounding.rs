@@ -74,9 +74,7 @@ fn main() -> drapery::Result<()> {
             .positions()
             .iter()
             .enumerate()
-            .map(|(i, p)| {
-                *p + seed * direction(i as u64 + (1 << 40)) + pert * direction(i as u64)
-            })
+            .map(|(i, p)| *p + seed * direction(i as u64 + (1 << 40)) + pert * direction(i as u64))
             .collect();
         sim.set_positions(&x)?;
         sims.push(sim);
