@@ -154,7 +154,7 @@ fn model(scene: &str, n: usize, bend: f64) -> drapery::Result<Model> {
     let mut cloth = ClothDesc {
         name: c.name.clone(),
         mesh: c.mesh.clone(),
-        material: c.material.clone(),
+        material: c.material,
         pins: Vec::new(),
         initial_velocity: Vec3::ZERO,
         handles: Vec::new(),
@@ -165,7 +165,7 @@ fn model(scene: &str, n: usize, bend: f64) -> drapery::Result<Model> {
             let c: &CollisionSettings = pile.collision().unwrap();
             let settings = CollisionSettings {
                 self_collision: false,
-                ..c.clone()
+                ..*c
             };
             let obstacles = pile.obstacles().to_vec();
             Model::new(vec![cloth], pile.gravity())?.with_collisions(settings, obstacles)
@@ -185,7 +185,7 @@ fn model(scene: &str, n: usize, bend: f64) -> drapery::Result<Model> {
             };
             let obstacles = pile.obstacles().to_vec();
             Model::new(vec![cloth], pile.gravity())?
-                .with_collisions(pile.collision().unwrap().clone(), obstacles)
+                .with_collisions(*pile.collision().unwrap(), obstacles)
         }
         "pinch" => {
             let mesh = drapery::Mesh::grid([1.0, 1.0], [n, n], Vec3::ZERO, Vec3::Y)?;
