@@ -516,6 +516,63 @@ mod tests {
         }
     }
 
+    /// docs/ROUNDING.md, "Physics or artefact": two pile-32 runs 1e-9 m apart, direct solver.
+    /// In free fall the step does not amplify their distance δ; after the ground contact δ
+    /// grows from 1e-7 to 1e-4 m in a physical time that does not shrink with the step: at
+    /// h = 1/960 s it takes at least a quarter of what it takes at h = 1/60 s, where an
+    /// amplification of the step (a fixed factor per step, ×100 in ROUNDING.md) would take 16
+    /// times fewer seconds.
+    #[test]
+    fn pile_divergence_is_a_rate_per_second_not_per_step() {
+        let grow = |sub: usize| -> f64 {
+            let h = 1.0 / (60.0 * sub as f64);
+            let settings = SolverSettings {
+                linear_solver: crate::LinearSolver::Direct,
+                ..Default::default()
+            };
+            let mut sims = [0.0, 1e-9].map(|moved| {
+                let mut sim = Simulation::new(Preset::Pile.model(32).unwrap(), settings).unwrap();
+                let x: Vec<Vec3> = (sim.positions().iter().enumerate())
+                    .map(|(i, p)| *p + moved * Vec3::new(1.0, (i % 7) as f64 / 7.0, -0.5))
+                    .collect();
+                sim.set_positions(&x).unwrap();
+                sim
+            });
+            let apart = |sims: &[Simulation; 2]| {
+                (sims[0].positions().iter().zip(sims[1].positions()))
+                    .map(|(a, b)| a.distance(*b))
+                    .fold(0.0, f64::max)
+            };
+            let start = apart(&sims);
+            let mut crossed: [Option<f64>; 2] = [None; 2];
+            for s in 0..18 * sub {
+                for sim in &mut sims {
+                    sim.step(h).unwrap();
+                }
+                let t = (s + 1) as f64 * h;
+                let d = apart(&sims);
+                if t < 0.14 {
+                    // free fall (the lowest row reaches the ground at 0.157 s)
+                    assert!(d <= start * (1.0 + 1e-6), "free fall amplifies: {d} at {t}");
+                }
+                for (c, level) in crossed.iter_mut().zip([1e-7, 1e-4]) {
+                    if c.is_none() && d > level {
+                        *c = Some(t);
+                    }
+                }
+            }
+            match crossed {
+                [Some(a), Some(b)] => b - a,
+                _ => panic!("at h = {h} the runs do not diverge to 1e-4 m in 0.3 s: {crossed:?}"),
+            }
+        };
+        let (coarse, fine) = (grow(1), grow(16));
+        assert!(
+            fine >= 0.25 * coarse && fine <= 4.0 * coarse,
+            "1e-7 → 1e-4 m takes {coarse} s at h = 1/60 and {fine} s at h = 1/960"
+        );
+    }
+
     #[test]
     fn textile_scenes_have_their_mass_pins_and_support() {
         // cantilever at 1 cm: 16 + 2 columns, 5 rows, two columns pinned; 0.1 kg/m² over
