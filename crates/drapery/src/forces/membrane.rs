@@ -4,7 +4,9 @@
 //!
 //! Per triangle with rest coordinates `r_0, r_1, r_2` (material frame, m): `D_m = [r_1 - r_0,
 //! r_2 - r_0]`, `F = [x_1 - x_0, x_2 - x_0] D_m⁻¹` (3×2), `E = ½ (FᵀF - I)`, energy `A W(E)` with
-//! `W = ½ (C11 E11² + 2 C12 E11 E22 + C22 E22²) + 2 G E12²`. The force is `-∇(A W)` exactly;
+//! `W = ½ (C11 E11² + 2 C12 E11 E22 + C22 E22²) + 2 G E12²`, plus a compression term on
+//! principal stretches below 0.8 that keeps the stiffness positive under strong compression
+//! (MATH §20, "Compression": exactly St Venant–Kirchhoff above). The force is `-∇(A W)` exactly;
 //! the matrix uses the Hessian with `∂²W/∂F²` (6×6) projected to positive semi-definite, so
 //! `-K` is positive semi-definite at every configuration. Stiffness-proportional damping
 //! `f = -α H⁺ v` (the projected Hessian) has the dissipation potential `Ψ = ½ α vᵀ H⁺ v`.
@@ -1113,6 +1115,16 @@ mod tests {
         assert!(lambda.iter().all(|&l| l > -1e-10), "{lambda:?}");
         let differs = (0..9).any(|i| (0..9).any(|j| (exact[i][j] - minus_k[i][j]).abs() > 1.0));
         assert!(differs);
+        // C = I/4: equal principal stretches 0.5 < s₀, the compression term's `2θ` at its
+        // limit; the exact Hessian is still the force's difference
+        let comp = m.strain(&m.elements[0], &x).compression;
+        assert!(comp.is_some_and(|c| c.across.0 > 0.0));
+        let fd: Vec<Vec<f64>> = fd_jacobian(&m, &x, &v, false)
+            .into_iter()
+            .map(|row| row.into_iter().map(|k| -k).collect())
+            .collect();
+        let exact: Vec<Vec<f64>> = exact.iter().map(|r| r.to_vec()).collect();
+        assert!(rel_diff(&exact, &fd) < 1e-6, "{}", rel_diff(&exact, &fd));
     }
 
     fn edge_lengths(r: &[[f64; 2]; 3]) -> [f64; 3] {
