@@ -10,6 +10,14 @@
 //! form counts the instructions of STEPS steps from the same state (building the model and
 //! reading FILE are the rest: subtract a run of 0 steps).
 //!
+//! `... -- N trace STEPS FILE` restores FILE (or, with `-` for FILE, starts from the scene's
+//! start) and runs STEPS steps, printing after each the least principal stretch of any
+//! triangle (the square root of the least eigenvalue of `FᵀF` against the first mesh, the
+//! rest shape), how many triangles are under 1/√3 (where St Venant–Kirchhoff's compressive
+//! force peaks, docs/MATH.md §20), the greatest principal stretch, the greatest speed, the least
+//! principal stretch of the triangles around the fastest particle, and where the least and
+//! greatest stretched triangles are (centroid and its distance from the origin).
+//!
 //! The shape printed after each frame: the mean hinge angle (degrees), the mean and 99th
 //! percentile of `|θ|/h` (1/m, a curvature that compares resolutions), the share of hinges bent
 //! over 30°, the least and greatest edge length over rest length, the share of edges shorter than
