@@ -10,6 +10,14 @@
 //! form counts the instructions of STEPS steps from the same state (building the model and
 //! reading FILE are the rest: subtract a run of 0 steps).
 //!
+//! `... -- N trace STEPS FILE` restores FILE (or, with `-` for FILE, starts from the scene's
+//! start) and runs STEPS steps, printing after each the least principal stretch of any
+//! triangle (the square root of the least eigenvalue of `FᵀF` against the first mesh, the
+//! rest shape), how many triangles are under 1/√3 (where St Venant–Kirchhoff's compressive
+//! force peaks, docs/MATH.md §20), the greatest principal stretch, the greatest speed, the least
+//! principal stretch of the triangles around the fastest particle, and where the least and
+//! greatest stretched triangles are (centroid and its distance from the origin).
+//!
 //! The shape printed after each frame: the mean hinge angle (degrees), the mean and 99th
 //! percentile of `|θ|/h` (1/m, a curvature that compares resolutions), the share of hinges bent
 //! over 30°, the least and greatest edge length over rest length, the share of edges shorter than
@@ -105,9 +113,52 @@ impl Shape {
     }
 }
 
+/// The principal stretches of the cloth's triangles: the square roots of the eigenvalues of
+/// `C = FᵀF`, found frame-free as the roots `λ` of `det(G − λ G₀) = 0` with `G`, `G₀` the Gram
+/// matrices of a triangle's two edges now and at rest.
+struct Stretches {
+    /// Triangles and the rest Gram matrices `[e1·e1, e1·e2, e2·e2]`.
+    tris: Vec<([u32; 3], [f64; 3])>,
+}
+
+impl Stretches {
+    fn new(sim: &Simulation) -> Stretches {
+        let mesh = &sim.model().cloths()[0].mesh;
+        let x = &mesh.positions;
+        let tris = (mesh.triangles().into_iter())
+            .map(|t| (t, gram(t, x)))
+            .collect();
+        Stretches { tris }
+    }
+
+    /// `[least, greatest]` principal stretch of each triangle.
+    fn principal(&self, x: &[Vec3]) -> Vec<[f64; 2]> {
+        (self.tris.iter())
+            .map(|(t, [a0, b0, c0])| {
+                let [a, b, c] = gram(*t, x);
+                // det(G − λ G₀) = p λ² − q λ + r
+                let p = a0 * c0 - b0 * b0;
+                let q = a * c0 + c * a0 - 2.0 * b * b0;
+                let r = a * c - b * b;
+                let d = (q * q - 4.0 * p * r).max(0.0).sqrt();
+                let (lo, hi) = ((q - d) / (2.0 * p), (q + d) / (2.0 * p));
+                [lo.max(0.0).sqrt(), hi.max(0.0).sqrt()]
+            })
+            .collect()
+    }
+}
+
+/// `[e1·e1, e1·e2, e2·e2]` of triangle `t`'s edges from its first vertex.
+fn gram(t: [u32; 3], x: &[Vec3]) -> [f64; 3] {
+    let [i, j, k] = t.map(|p| x[p as usize]);
+    let (e1, e2) = (j - i, k - i);
+    [e1.dot(e1), e1.dot(e2), e2.dot(e2)]
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let usage = "usage: spin_counts N save FRAMES FILE | N steps STEPS FILE [free]";
+    let usage =
+        "usage: spin_counts N save FRAMES FILE | N steps STEPS FILE [free] | N trace STEPS FILE";
     if args.len() < 4 {
         return Err(usage.into());
     }
@@ -141,6 +192,54 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 }
             }
             std::fs::write(file, sim.snapshot().to_bytes())?;
+        }
+        "trace" => {
+            let (mut sim, h, _) = simulation(n, false)?;
+            let stretches = Stretches::new(&sim);
+            if file != "-" {
+                sim.restore_snapshot(&Snapshot::from_bytes(&std::fs::read(file)?)?)?;
+            }
+            println!(
+                "step min_principal_stretch triangles_under_1/sqrt3 max_principal_stretch max_speed min_stretch_at_fastest least_at_x y z r greatest_at_x y z r"
+            );
+            for k in 0..count {
+                sim.step(h)?;
+                let s = stretches.principal(sim.positions());
+                let lo = s.iter().fold(f64::MAX, |m, p| m.min(p[0]));
+                let hi = s.iter().fold(0.0f64, |m, p| m.max(p[1]));
+                let x = sim.positions();
+                let centre = |i: usize| {
+                    let t = stretches.tris[i].0.map(|p| x[p as usize]);
+                    (t[0] + t[1] + t[2]) / 3.0
+                };
+                let imin = (0..s.len())
+                    .min_by(|&a, &b| s[a][0].total_cmp(&s[b][0]))
+                    .unwrap_or(0);
+                let imax = (0..s.len())
+                    .max_by(|&a, &b| s[a][1].total_cmp(&s[b][1]))
+                    .unwrap_or(0);
+                let (cmin, cmax) = (centre(imin), centre(imax));
+                let under = s.iter().filter(|p| p[0] < 3f64.sqrt().recip()).count();
+                let v = sim.velocities();
+                let fast = (0..v.len())
+                    .max_by(|&a, &b| v[a].length().total_cmp(&v[b].length()))
+                    .unwrap_or(0);
+                let near = (stretches.tris.iter().zip(&s))
+                    .filter(|(t, _)| t.0.contains(&(fast as u32)))
+                    .fold(f64::MAX, |m, (_, p)| m.min(p[0]));
+                println!(
+                    "{k} {lo:.4} {under} {hi:.4} {:.3} {near:.4} {:.3} {:.3} {:.3} {:.4} {:.3} {:.3} {:.3} {:.4}",
+                    v[fast].length(),
+                    cmin.x,
+                    cmin.y,
+                    cmin.z,
+                    cmin.length(),
+                    cmax.x,
+                    cmax.y,
+                    cmax.z,
+                    cmax.length()
+                );
+            }
         }
         "steps" => {
             let free = args.get(4).is_some_and(|a| a == "free");

@@ -4,7 +4,9 @@
 //!
 //! Per triangle with rest coordinates `r_0, r_1, r_2` (material frame, m): `D_m = [r_1 - r_0,
 //! r_2 - r_0]`, `F = [x_1 - x_0, x_2 - x_0] D_m⁻¹` (3×2), `E = ½ (FᵀF - I)`, energy `A W(E)` with
-//! `W = ½ (C11 E11² + 2 C12 E11 E22 + C22 E22²) + 2 G E12²`. The force is `-∇(A W)` exactly;
+//! `W = ½ (C11 E11² + 2 C12 E11 E22 + C22 E22²) + 2 G E12²`, plus a compression term on
+//! principal stretches below 0.8 that keeps the stiffness positive under strong compression
+//! (MATH §20, "Compression": exactly St Venant–Kirchhoff above). The force is `-∇(A W)` exactly;
 //! the matrix uses the Hessian with `∂²W/∂F²` (6×6) projected to positive semi-definite, so
 //! `-K` is positive semi-definite at every configuration. Stiffness-proportional damping
 //! `f = -α H⁺ v` (the projected Hessian) has the dissipation potential `Ψ = ½ α vᵀ H⁺ v`.
@@ -65,6 +67,121 @@ struct Constants {
     g: f64,
 }
 
+impl Constants {
+    /// `k = max(C11, C22, C12 + 2G)`: the greatest modulus `W''(E)` of the law under a
+    /// uniaxial strain `E = e n nᵀ` along any direction `n` (§20, compression).
+    fn compression_modulus(&self) -> f64 {
+        self.c11.max(self.c22).max(self.c12 + 2.0 * self.g)
+    }
+}
+
+/// The principal stretch below which the compression term acts (§20).
+pub const COMPRESSION_STRETCH: f64 = 0.8;
+
+/// The compression term `ψ(s) = (k/8) δ³ (4 s₀ − δ)`, `δ = s₀ − s`, of one principal stretch
+/// `s < s₀` and its first two derivatives in `s` (all three 0 at `s ≥ s₀`).
+fn compression_term(k: f64, s: f64) -> [f64; 3] {
+    let s0 = COMPRESSION_STRETCH;
+    let d = (s0 - s).max(0.0);
+    [
+        0.125 * k * d * d * d * (4.0 * s0 - d),
+        -0.5 * k * d * d * (3.0 * s0 - d),
+        1.5 * k * d * (2.0 * s0 - d),
+    ]
+}
+
+/// The compression term of a triangle with a principal stretch below
+/// [`COMPRESSION_STRETCH`]: what it adds to the energy, and the parts of its `∂²W/∂F²` beyond
+/// its stress (which is folded into [`Strain::s`]).
+#[derive(Clone, Copy, Debug)]
+struct Compression {
+    /// `Σ_i ψ(s_i)`, J/m².
+    energy: f64,
+    /// Per principal direction `i`: `ψ''(s_i) − ψ'(s_i)/s_i ≥ 0` and the 6-vector
+    /// `n_i = [v_i1 û_i, v_i2 û_i]`, `û_i = F v_i / s_i`.
+    along: [(f64, [Vec3; 2]); 2],
+    /// `2θ = (g_1 − g_2)/(λ_1 − λ_2) ≥ 0`, `g_i = ψ'(s_i)/s_i`, and the 6-vector
+    /// `m = [v_21 u_1 + v_11 u_2, v_22 u_1 + v_12 u_2]`, `u_i = F v_i`.
+    across: (f64, [Vec3; 2]),
+}
+
+/// The compression term of `F = [f_1, f_2]` for modulus `k`, and the stress `2 ∂Ψ/∂C` it adds
+/// (`[S11, S12, S22]`); `None` when both principal stretches are at least
+/// [`COMPRESSION_STRETCH`].
+fn compression(k: f64, f: [Vec3; 2]) -> Option<(Compression, [f64; 3])> {
+    let s0 = COMPRESSION_STRETCH;
+    let (c11, c12, c22) = (f[0].dot(f[0]), f[0].dot(f[1]), f[1].dot(f[1]));
+    let half = 0.5 * (c11 + c22);
+    let r = (0.25 * (c11 - c22).powi(2) + c12 * c12).sqrt();
+    let l2 = half + r;
+    // λ_1 = det C / λ_2, det C = |f_1 × f_2|², without the cancellation of `half − r`
+    let l1 = if l2 > 0.0 {
+        f[0].cross(f[1]).length_squared() / l2
+    } else {
+        0.0
+    };
+    if l1 >= s0 * s0 {
+        return None;
+    }
+    // eigenvectors: v_1 for λ_1 from the longer of the two rows' null vectors
+    let v1 = {
+        let a = [c12, l1 - c11];
+        let b = [l1 - c22, c12];
+        let (na, nb) = (a[0] * a[0] + a[1] * a[1], b[0] * b[0] + b[1] * b[1]);
+        let (v, n) = if na >= nb { (a, na) } else { (b, nb) };
+        if n > 0.0 {
+            let n = n.sqrt();
+            [v[0] / n, v[1] / n]
+        } else {
+            [1.0, 0.0]
+        }
+    };
+    let v = [v1, [-v1[1], v1[0]]];
+    let lambda = [l1, l2];
+    let mut energy = 0.0;
+    let mut stress = [0.0; 3];
+    let mut g = [0.0; 2];
+    let mut a = [0.0; 2];
+    let mut u = [Vec3::ZERO; 2];
+    let mut along = [(0.0, [Vec3::ZERO; 2]); 2];
+    for i in 0..2 {
+        // a floor on s keeps a triangle collapsed onto a line finite (its direction is then
+        // arbitrary, like a spring's of zero length)
+        let st = lambda[i].sqrt().max(1e-12 * s0);
+        let [psi, d1, d2] = compression_term(k, st);
+        energy += psi;
+        g[i] = d1 / st;
+        a[i] = d2 - d1 / st;
+        u[i] = v[i][0] * f[0] + v[i][1] * f[1];
+        stress[0] += g[i] * v[i][0] * v[i][0];
+        stress[1] += g[i] * v[i][0] * v[i][1];
+        stress[2] += g[i] * v[i][1] * v[i][1];
+        let uhat = u[i] / st;
+        along[i] = (a[i], [v[i][0] * uhat, v[i][1] * uhat]);
+    }
+    let gap = lambda[1] - lambda[0];
+    let theta2 = if gap > 1e-9 * lambda[1] {
+        (g[0] - g[1]) / (lambda[0] - lambda[1])
+    } else {
+        // the limit 2φ''(λ) = (ψ'' − ψ'/s)/(2 s²)
+        let s = (0.5 * (lambda[0] + lambda[1])).sqrt().max(1e-12 * s0);
+        let [_, d1, d2] = compression_term(k, s);
+        (d2 - d1 / s) / (2.0 * s * s)
+    };
+    let m = [
+        v[1][0] * u[0] + v[0][0] * u[1],
+        v[1][1] * u[0] + v[0][1] * u[1],
+    ];
+    Some((
+        Compression {
+            energy,
+            along,
+            across: (theta2, m),
+        },
+        stress,
+    ))
+}
+
 /// One triangle, precomputed from its rest shape.
 #[derive(Clone, Copy, Debug)]
 struct Element {
@@ -87,8 +204,10 @@ struct Strain {
     f: [Vec3; 2],
     /// `[E11, E12, E22]`.
     e: [f64; 3],
-    /// `[S11, S12, S22]`.
+    /// `[S11, S12, S22]`, the compression term's included.
     s: [f64; 3],
+    /// The compression term, when a principal stretch is below [`COMPRESSION_STRETCH`].
+    compression: Option<Compression>,
 }
 
 /// The membrane force on a set of triangles, with stiffness-proportional damping.
@@ -152,14 +271,23 @@ impl Membrane {
         let e11 = 0.5 * (f[0].dot(f[0]) - 1.0);
         let e22 = 0.5 * (f[1].dot(f[1]) - 1.0);
         let e12 = 0.5 * f[0].dot(f[1]);
+        let mut s = [
+            c.c11 * e11 + c.c12 * e22,
+            2.0 * c.g * e12,
+            c.c12 * e11 + c.c22 * e22,
+        ];
+        let compression = (el.area > 0.0)
+            .then(|| compression(c.compression_modulus(), f))
+            .flatten()
+            .map(|(comp, extra)| {
+                s = [s[0] + extra[0], s[1] + extra[1], s[2] + extra[2]];
+                comp
+            });
         Strain {
             f,
             e: [e11, e12, e22],
-            s: [
-                c.c11 * e11 + c.c12 * e22,
-                2.0 * c.g * e12,
-                c.c12 * e11 + c.c22 * e22,
-            ],
+            s,
+            compression,
         }
     }
 
@@ -175,7 +303,17 @@ impl Membrane {
         let h11 = diag(s11) + c.c11 * f11 + c.g * f22;
         let h22 = diag(s22) + c.c22 * f22 + c.g * f11;
         let h12 = diag(s12) + c.c12 * outer(f1, f2) + c.g * outer(f2, f1);
-        [[h11, h12], [h12.transpose(), h22]]
+        let mut h = [[h11, h12], [h12.transpose(), h22]];
+        if let Some(comp) = &st.compression {
+            let (theta2, m) = comp.across;
+            for (coef, n) in comp.along.into_iter().chain([(theta2, m)]) {
+                h[0][0] += coef * outer(n[0], n[0]);
+                h[1][1] += coef * outer(n[1], n[1]);
+                h[0][1] += coef * outer(n[0], n[1]);
+            }
+            h[1][0] = h[0][1].transpose();
+        }
+        h
     }
 
     /// `∂²W/∂F²` projected to positive semi-definite. When `S` is positive semi-definite the
@@ -214,7 +352,7 @@ impl Membrane {
         let [e11, e12, e22] = st.e;
         let w = 0.5 * (c.c11 * e11 * e11 + 2.0 * c.c12 * e11 * e22 + c.c22 * e22 * e22)
             + 2.0 * c.g * e12 * e12;
-        el.area * w
+        el.area * (w + st.compression.map_or(0.0, |comp| comp.energy))
     }
 
     /// The energy Hessian blocks `scale · A Gᵀ h G` over the triangle's particles, for a
@@ -539,6 +677,40 @@ mod tests {
             })
     }
 
+    /// Two triangles as in [`config`], deformed by a random stretch `q diag(l1, l2, l3)` with
+    /// `l` from 0.1 to 1.5 (so most triangles have a principal stretch under
+    /// [`COMPRESSION_STRETCH`], many under 1/√3), plus small displacements.
+    fn compressed_config() -> impl Strategy<Value = (Membrane, Vec<Vec3>, Vec<Vec3>)> {
+        (
+            prop::collection::vec(vec3(1.0), 4),
+            (rotation(), 0.1..1.5f64, 0.1..1.5f64, 0.1..1.5f64),
+            prop::collection::vec(vec3(0.01), 4),
+            prop::collection::vec(vec3(2.0), 4),
+            law(),
+            0.0..0.05f64,
+        )
+            .prop_filter_map(
+                "well-shaped rest triangles",
+                |(p, (q, l1, l2, l3), d, v, law, alpha)| {
+                    if TRIS.iter().any(|t| quality(t.map(|i| p[i as usize])) < 0.2) {
+                        return None;
+                    }
+                    let rest = material_coordinates(&p, &TRIS, None);
+                    let m = Membrane::new(TRIS.to_vec(), rest, law, alpha);
+                    let a = Mat3::from_quat(q)
+                        * Mat3::from_diagonal(Vec3::new(l1, l2, l3))
+                        * Mat3::from_quat(q.inverse());
+                    let x = p.iter().zip(&d).map(|(p, d)| a * *p + *d).collect();
+                    Some((m, x, v))
+                },
+            )
+    }
+
+    /// Either kind of configuration, half and half.
+    fn any_config() -> impl Strategy<Value = (Membrane, Vec<Vec3>, Vec<Vec3>)> {
+        prop_oneof![config(), compressed_config()]
+    }
+
     /// The exact energy Hessian of all triangles, dense.
     fn exact_dense(m: &Membrane, x: &[Vec3]) -> Vec<Vec<f64>> {
         let n = x.len();
@@ -575,7 +747,7 @@ mod tests {
 
     proptest! {
         #[test]
-        fn membrane_force_is_minus_the_energy_gradient((m, x, _v) in config()) {
+        fn membrane_force_is_minus_the_energy_gradient((m, x, _v) in any_config()) {
             let zero = vec![Vec3::ZERO; 4];
             let f = forces(&m, &x, &zero);
             let fd = fd_gradient(&m, &x);
@@ -586,7 +758,7 @@ mod tests {
         }
 
         #[test]
-        fn membrane_exact_hessian_is_the_difference_of_the_force((m, x, _v) in config()) {
+        fn membrane_exact_hessian_is_the_difference_of_the_force((m, x, _v) in any_config()) {
             let zero = vec![Vec3::ZERO; 4];
             let exact = exact_dense(&m, &x);
             let fd: Vec<Vec<f64>> = fd_jacobian(&m, &x, &zero, false)
@@ -600,7 +772,7 @@ mod tests {
         /// triangle's exact Hessian is positive semi-definite iff its `S` is (§20), and where
         /// every `S` is, the matrix is `-H`.
         #[test]
-        fn membrane_matrix_is_the_psd_projection((m, x, v) in config()) {
+        fn membrane_matrix_is_the_psd_projection((m, x, v) in any_config()) {
             let k = assembled(&m, &x, &v, 1.0, 0.0);
             let scale = max_abs_entry(&k).max(1e-300);
             for r in 0..12 {
@@ -669,7 +841,7 @@ mod tests {
         }
 
         #[test]
-        fn membrane_damping_jacobian_and_dissipation_match_differences((m, x, v) in config()) {
+        fn membrane_damping_jacobian_and_dissipation_match_differences((m, x, v) in any_config()) {
             let got = assembled(&m, &x, &v, 0.0, 1.0);
             // the force is linear in v, so a central difference of step 1 m/s is exact up to
             // rounding; a small step would divide the rounding of the (much larger) elastic
@@ -700,7 +872,7 @@ mod tests {
 
         #[test]
         fn membrane_product_and_fused_linearization_agree_with_the_matrix(
-            (m, x, v) in config(),
+            (m, x, v) in any_config(),
             a in -2.0..2.0f64,
             b in -2.0..2.0f64,
             w in prop::collection::vec(vec3(1.0), 4),
@@ -799,7 +971,8 @@ mod tests {
                     "{phi:?} {e}: {ef}"
                 );
             }
-            for gamma in [0.05f64, -0.1, 0.3] {
+            // (|γ| ≤ 0.15 keeps the least principal stretch, √(1 − 2|γ|), above s₀ = 0.8)
+            for gamma in [0.05f64, -0.1, 0.15] {
                 let s = (1.0 - 4.0 * gamma * gamma).sqrt();
                 let sheared = deformed(&p, [t, w, n], [t, 2.0 * gamma * t + s * w, n]);
                 let es = m.energy(T, &sheared);
@@ -818,6 +991,74 @@ mod tests {
             let best = energy(-0.3 * e);
             assert!(best < energy(-0.3 * e + 1e-3) && best < energy(-0.3 * e - 1e-3));
             assert!(best < energy(0.0) && best < energy(-e));
+        }
+    }
+
+    /// A square squeezed along the warp (weft held, `F = [s t, w]`): above `s₀` the energy is
+    /// St Venant–Kirchhoff's `½ C11 E11²`, whose compressive force `(C11/2) s (1 − s²)` peaks at
+    /// `s = 1/√3` and falls to 0 at `s = 0`; below `s₀` it is that energy's second-order
+    /// Taylor polynomial at `s₀` (here `C11` is the law's greatest modulus `k`), so the
+    /// compressive force keeps growing as the square is squeezed, up to `k s₀³` at `s = 0`.
+    #[test]
+    fn a_squeezed_square_keeps_its_stiffness() {
+        let law = MembraneLaw {
+            stretch_modulus: [1000.0, 400.0],
+            poisson: 0.2,
+            shear_modulus: 100.0,
+        };
+        let c11 = 1000.0 / (1.0 - 0.2 * 0.2 * 0.4);
+        let s0 = COMPRESSION_STRETCH;
+        let w = |s: f64| 0.125 * c11 * (s * s - 1.0).powi(2);
+        let dw = |s: f64| 0.5 * c11 * s * (s * s - 1.0);
+        let ddw = |s: f64| 0.5 * c11 * (3.0 * s * s - 1.0);
+        for phi in [None, Some(0.7)] {
+            let (m, p, [t, wf, n]) = square(law, phi);
+            assert_eq!(m.constants.compression_modulus(), m.constants.c11);
+            let zero = vec![Vec3::ZERO; 4];
+            let pull =
+                |f: &[Vec3]| -> f64 { (0..4).map(|i| (p[i] - p[0]).dot(t) * f[i].dot(t)).sum() };
+            let mut last = 0.0;
+            for k in 0..40 {
+                let s = 1.2 - 0.03 * f64::from(k) - 1e-3;
+                let x = deformed(&p, [t, wf, n], [s * t, wf, n]);
+                let d = s - s0;
+                let (want, want_ds) = if s >= s0 {
+                    (w(s), dw(s))
+                } else {
+                    (
+                        w(s0) + dw(s0) * d + 0.5 * ddw(s0) * d * d,
+                        dw(s0) + ddw(s0) * d,
+                    )
+                };
+                let e = m.energy(T, &x);
+                assert!(
+                    (e - want).abs() < 1e-10 * c11,
+                    "{phi:?} s = {s}: {e} vs {want}"
+                );
+                // dW/ds = -Σ_i f_i · ∂x_i/∂s, ∂x_i/∂s = ((p_i - p_0)·t) t
+                let f = forces(&m, &x, &zero);
+                let tension = -pull(&f);
+                assert!(
+                    (tension - want_ds).abs() < 1e-9 * c11,
+                    "{phi:?} s = {s}: {tension} vs {want_ds}"
+                );
+                // the compressive force grows as s falls, where St Venant–Kirchhoff's falls
+                if s < 1.0 {
+                    assert!(
+                        -tension > last,
+                        "{phi:?} s = {s}: {} after {last}",
+                        -tension
+                    );
+                    last = -tension;
+                }
+            }
+            let stvk = |s: f64| -dw(s);
+            assert!(stvk(0.3) < stvk(0.5) && stvk(0.5) < stvk(1.0 / 3f64.sqrt()));
+            // at s → 0 the compressive force is k s₀³ (St Venant–Kirchhoff: 0)
+            let x = deformed(&p, [t, wf, n], [1e-9 * t, wf, n]);
+            let f = forces(&m, &x, &zero);
+            let push = pull(&f);
+            assert!((push - c11 * s0.powi(3)).abs() < 1e-6 * c11, "{push}");
         }
     }
 
@@ -874,6 +1115,16 @@ mod tests {
         assert!(lambda.iter().all(|&l| l > -1e-10), "{lambda:?}");
         let differs = (0..9).any(|i| (0..9).any(|j| (exact[i][j] - minus_k[i][j]).abs() > 1.0));
         assert!(differs);
+        // C = I/4: equal principal stretches 0.5 < s₀, the compression term's `2θ` at its
+        // limit; the exact Hessian is still the force's difference
+        let comp = m.strain(&m.elements[0], &x).compression;
+        assert!(comp.is_some_and(|c| c.across.0 > 0.0));
+        let fd: Vec<Vec<f64>> = fd_jacobian(&m, &x, &v, false)
+            .into_iter()
+            .map(|row| row.into_iter().map(|k| -k).collect())
+            .collect();
+        let exact: Vec<Vec<f64>> = exact.iter().map(|r| r.to_vec()).collect();
+        assert!(rel_diff(&exact, &fd) < 1e-6, "{}", rel_diff(&exact, &fd));
     }
 
     fn edge_lengths(r: &[[f64; 2]; 3]) -> [f64; 3] {
