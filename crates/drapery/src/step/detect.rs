@@ -98,14 +98,14 @@ pub(crate) fn contacts(
         let features = SharpFeatures::new(v0, v1, tris);
         let margin = 2.0 * c.thickness;
         let owner = (k as u32, pose.h);
-        let mut pairs = obstacle_proximities(x0, triangles, edges, &features, owner, margin);
+        let mut close = obstacle_proximities(x0, triangles, edges, &features, owner, margin);
         // friction, lagged Coulomb: the Coulomb force of the starting normal force at the
         // starting sliding speed (viscous below 1 mm/s)
-        for p in &mut pairs {
+        for p in &mut close {
             let normal = c.stiffness * (c.thickness - p.dist).max(0.0);
             p.damping = lagged_coulomb(o.friction * normal, sliding(p, &start.v0).length());
         }
-        near.extend(pairs);
+        near.extend(close);
     }
     // (the obstacle is particle `n` for `exempt`, as in the fail-safe's pairs)
     near.retain(|s| {

@@ -58,8 +58,7 @@ pub struct StepReport {
     /// Linear solves (more than one per Newton iteration when contacts were released).
     pub linear_solves: usize,
     /// Preconditioner set-ups (multigrid refreshes) over the linear solves: a solve whose
-    /// initial guess already met the tolerance, or that only tightened the previous one's
-    /// solution, needs none.
+    /// initial guess already met the tolerance needs none.
     pub preconditioner_setups: usize,
     /// Final relative residual of the last PCG solve (0 with the direct solver).
     pub residual: f64,

@@ -8,10 +8,12 @@
 //!   forces), copied into the enlarged system matrix, and the contact blocks added there; the
 //!   **preconditioner matrix** is the base matrix plus the contacts' diagonal blocks (their
 //!   coupling left out), so the multigrid keeps one structure for the whole run.
-//! * Contacts that add no block to the base pattern (the cloth–collider pairs, whose cloth
-//!   particles share a triangle or an edge) are assembled with the model's forces, into the base
-//!   matrix, so the preconditioner gets their blocks, coupling and all; when all contacts are
-//!   such, the system matrix keeps the base pattern and is its own preconditioner.
+//! * A contact force whose pairs add no block to the base pattern (the cloth–collider pairs,
+//!   whose cloth particles share a triangle or an edge; cloth–cloth stencils too when every
+//!   pair of their particles is already coupled by the model's forces) is assembled with the
+//!   model's forces, into the base matrix, so the preconditioner gets its blocks, coupling and
+//!   all; when all contacts are such, the system matrix keeps the base pattern and is its own
+//!   preconditioner.
 
 use crate::forces::{Force, Linearization};
 use crate::linalg::BlockMatrix;
