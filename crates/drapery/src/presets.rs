@@ -468,7 +468,8 @@ mod tests {
     /// Issue 18, rounding amplification (docs/ROUNDING.md): the pile's first second at PCG
     /// tolerances from 0.9e-3 to 1.2e-3 and with its initial positions moved by ±1e-9 m. Runs
     /// that differ only by rounding must do the same amount of contact work: every run's mean
-    /// self-contact stencils and CCD hits per step lie within 2× of the median run's.
+    /// self-contact stencils and CCD hits per step lie within 2× of the median run's (CCD hits:
+    /// or under one per step).
     #[test]
     fn pile_contact_work_does_not_depend_on_rounding() {
         let h = 1.0 / 60.0;
@@ -500,14 +501,18 @@ mod tests {
                 sum
             })
             .collect();
+        // With obstacle friction in the solve (docs/MATH.md §25) the fail-safe has almost
+        // nothing left to stop on the pile (0 to 0.08 CCD hits per step): a run may then have
+        // up to one hit per step more than twice the median, not one whole hit more than zero.
         for k in 0..2 {
             let mut m: Vec<f64> = means.iter().map(|r| r[k]).collect();
             m.sort_by(f64::total_cmp);
             let median = 0.5 * (m[2] + m[3]);
-            assert!(median > 0.0, "the pile has contacts: {means:?}");
+            let floor = [0.0, 1.0][k];
+            assert!(median > 0.0 || k == 1, "the pile has contacts: {means:?}");
             for (r, run) in means.iter().zip(&runs) {
                 assert!(
-                    r[k] <= 2.0 * median && r[k] >= 0.5 * median,
+                    r[k] <= (2.0 * median).max(floor) && r[k] >= 0.5 * median,
                     "{} per step {} at {run:?}, median {median}: {means:?}",
                     ["self-contacts", "CCD hits"][k],
                     r[k]
@@ -589,6 +594,42 @@ mod tests {
         assert!((m.total_mass() - f.density * area).abs() < 1e-12);
         assert_eq!(m.obstacles.len(), 1);
         assert!(m.collision.is_some_and(|c| !c.self_collision));
+    }
+
+    /// docs/MATH.md §25: the 65² spin cloth (1090 N/m, 0.1 kg/m²) carried by the turning
+    /// sphere's friction. Its weight stretches it by about ρ g L / k ≈ 0.1 % and its speeds
+    /// (≤ 5 m/s) load it with ρ v² ≈ 2.5 N/m, 0.2 %: no edge may end 25 % shorter or 30 % longer
+    /// than at rest. With friction applied after the solve alone, sticking and sliding
+    /// neighbours were displaced against each other by up to the surface speed times the step:
+    /// edges at 0.30 to 2.34 of their rest length over frames 5–12 (0.90 to 1.10 with it in
+    /// the solve).
+    #[test]
+    fn the_spinning_sphere_carries_the_cloth_without_crushing_it() {
+        let n = 65;
+        let mut sim = Preset::Spin.simulation(n, 1e-3).unwrap();
+        let (h, per_frame) = Preset::Spin.step();
+        let edges = sim.model().edges();
+        let rest: Vec<f64> = (edges.iter())
+            .map(|&[a, b]| (sim.positions()[a as usize] - sim.positions()[b as usize]).length())
+            .collect();
+        for frame in 1..=12 {
+            for _ in 0..per_frame {
+                sim.step(h).unwrap();
+            }
+            if frame < 5 {
+                continue;
+            }
+            let x = sim.positions();
+            let (lo, hi) =
+                (edges.iter().zip(&rest)).fold((f64::MAX, 0.0f64), |(lo, hi), (e, r)| {
+                    let l = (x[e[0] as usize] - x[e[1] as usize]).length() / r;
+                    (lo.min(l), hi.max(l))
+                });
+            assert!(
+                lo > 0.75 && hi < 1.3,
+                "frame {frame}: edges at {lo:.3} to {hi:.3} of rest"
+            );
+        }
     }
 
     /// The spinning sphere's text is a scene `drapery run` reads: 100 frames at 25 per second

@@ -4,7 +4,9 @@
 //! [`Simulation::snapshot`] takes what a step depends on that changes from step to step: every
 //! position and velocity, the solver's warm start (the previous step's velocity change), the
 //! simulated time, the step count and what is still being untangled ([`crate::step::tangles`]:
-//! the vertices being pushed out of colliders and the crossed triangle pairs). [`Simulation::restore_snapshot`] puts it back into a simulation
+//! the vertices being pushed out of colliders and the crossed triangle pairs) and each particle's
+//! obstacle normal force of the last step (the lagged normal force of the friction in the
+//! solve). [`Simulation::restore_snapshot`] puts it back into a simulation
 //! built from the same scene (same model and settings); stepping on from there gives bit for
 //! bit what the uninterrupted run gives. Everything else a step uses is rebuilt from the model
 //! at [`Simulation::new`] and does not change during a run.
@@ -15,9 +17,10 @@
 //! magic `DRAPERY-STATE-4\n`, u64 header length + header bytes, u64 steps, u64 time bits, u64
 //! particle count n, 3n f64 positions, 3n f64 velocities, 3n f64 warm start, u64 1 when the
 //! starting tangles were found (else 0), u64 count + that many (u64 particle, u64 obstacle)
-//! being pushed out, u64 count + that many (u64, u64) crossed triangle pairs, and a u64 FNV-1a
-//! checksum ([`Fnv`]) of everything before it. A `DRAPERY-STATE-3` file (the same without the
-//! tangles) is read as having none left.
+//! being pushed out, u64 count + that many (u64, u64) crossed triangle pairs, n f64 normal
+//! forces, and a u64 FNV-1a checksum ([`Fnv`]) of everything before it. A `DRAPERY-STATE-4`
+//! file (the same without the normal forces) is read as having none, a `DRAPERY-STATE-3` file
+//! (without the tangles either) as having no tangles left.
 
 use crate::error::{Error, Result};
 use crate::fingerprint::Fnv;
@@ -25,7 +28,9 @@ use crate::math::Vec3;
 use crate::step::Simulation;
 
 /// The magic of the current layout.
-const MAGIC: &[u8] = b"DRAPERY-STATE-4\n";
+const MAGIC: &[u8] = b"DRAPERY-STATE-5\n";
+/// The layout before the normal forces.
+const MAGIC_4: &[u8] = b"DRAPERY-STATE-4\n";
 /// The layout before the tangles.
 const MAGIC_3: &[u8] = b"DRAPERY-STATE-3\n";
 /// What every version's magic starts with (`DRAPERY-STATE-2\n` was the CLI's own layout).
@@ -42,6 +47,8 @@ pub struct Snapshot {
     warm_start: Vec<Vec3>,
     /// Whether the starting tangles were found, then the pushed vertices and the crossings.
     tangles: (bool, Vec<[u32; 2]>, Vec<[u32; 2]>),
+    /// Each particle's obstacle normal force in the last step, N.
+    normal_force: Vec<f64>,
 }
 
 impl Simulation {
@@ -60,6 +67,7 @@ impl Simulation {
                 self.tangles.inside.clone(),
                 self.tangles.crossings.clone(),
             ),
+            normal_force: self.normal_force.clone(),
         }
     }
 
@@ -97,6 +105,11 @@ impl Simulation {
         self.model.x.clone_from(&s.x);
         self.model.v.clone_from(&s.v);
         self.warm_start.clone_from(&s.warm_start);
+        if s.normal_force.len() == n {
+            self.normal_force.clone_from(&s.normal_force);
+        } else {
+            self.normal_force = vec![0.0; n];
+        }
         self.time = s.time;
         self.steps = s.steps;
         Ok(())
@@ -170,6 +183,9 @@ impl Snapshot {
                 }
             }
         }
+        for f in &self.normal_force {
+            out.extend_from_slice(&f.to_le_bytes());
+        }
         let sum = Fnv::new().bytes(&out).finish();
         out.extend_from_slice(&sum.to_le_bytes());
         out
@@ -179,7 +195,8 @@ impl Snapshot {
     /// when they are not a snapshot of this version, are cut short or damaged.
     pub fn from_bytes(b: &[u8]) -> Result<Snapshot> {
         let v3 = b.starts_with(MAGIC_3);
-        if !b.starts_with(MAGIC) && !v3 {
+        let v4 = b.starts_with(MAGIC_4);
+        if !b.starts_with(MAGIC) && !v3 && !v4 {
             let head = &b[..b.len().min(32)];
             return Err(match head.iter().position(|&c| c == b'\n') {
                 Some(end) if head.starts_with(MAGIC_FAMILY) => Error::Invalid(format!(
@@ -238,11 +255,21 @@ impl Snapshot {
                     .collect()
             };
             let (inside, crossings) = (list()?, list()?);
-            if r.at != body.len() {
-                return Err(misfit());
-            }
             (found, inside, crossings)
         };
+        let normal_force = if v3 || v4 {
+            Vec::new()
+        } else {
+            let raw = r.take(8 * n).unwrap_or_default();
+            raw.chunks_exact(8)
+                .map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+                .collect()
+        };
+        if r.at != body.len() || (!v3 && !v4 && normal_force.len() != n) {
+            return Err(damaged(
+                "the particle count or a list length does not match the length",
+            ));
+        }
         Ok(Snapshot {
             header,
             time,
@@ -251,6 +278,7 @@ impl Snapshot {
             v,
             warm_start,
             tangles,
+            normal_force,
         })
     }
 }
@@ -367,6 +395,7 @@ mod tests {
                 Vec3::new(f64::MIN_POSITIVE, 2.0, 3.0),
             ],
             tangles: (true, vec![[1, 0]], vec![[0, 3], [2, u32::MAX]]),
+            normal_force: vec![0.125, -0.0],
         }
     }
 
@@ -375,13 +404,27 @@ mod tests {
     fn a_version_3_state_reads_with_no_tangles() {
         let mut s = sample();
         let b = s.to_bytes();
-        // version 3: the same up to the warm start, without the tangles section
+        // version 3: the same up to the warm start, without the tangles and normal forces
         let tangles = 8 + (8 + 16) + (8 + 2 * 16);
-        let mut old = b[..b.len() - 8 - tangles].to_vec();
+        let mut old = b[..b.len() - 8 - 16 - tangles].to_vec();
         old[..MAGIC.len()].copy_from_slice(MAGIC_3);
         let sum = Fnv::new().bytes(&old).finish();
         old.extend_from_slice(&sum.to_le_bytes());
         s.tangles = (true, Vec::new(), Vec::new());
+        s.normal_force = Vec::new();
+        assert_eq!(Snapshot::from_bytes(&old).unwrap(), s);
+    }
+
+    /// A state of the layout before the normal forces reads as the same state with none.
+    #[test]
+    fn a_version_4_state_reads_with_no_normal_forces() {
+        let mut s = sample();
+        let b = s.to_bytes();
+        let mut old = b[..b.len() - 8 - 16].to_vec();
+        old[..MAGIC.len()].copy_from_slice(MAGIC_4);
+        let sum = Fnv::new().bytes(&old).finish();
+        old.extend_from_slice(&sum.to_le_bytes());
+        s.normal_force = Vec::new();
         assert_eq!(Snapshot::from_bytes(&old).unwrap(), s);
     }
 

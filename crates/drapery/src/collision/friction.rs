@@ -401,6 +401,7 @@ mod tests {
                 normal_velocity: 0.3,
                 surface_velocity: surface,
                 friction: mu,
+                damping: 0.0,
             };
             let mut v = [Vec3::from_array(slide)];
             let before = v[0] - surface;

@@ -27,6 +27,9 @@ pub struct ObstacleContact {
     pub surface_velocity: Vec3,
     /// Coulomb coefficient.
     pub friction: f64,
+    /// Coefficient of the friction in the solve, N·s/m ([`crate::forces::ObstacleFrictions`]):
+    /// lagged Coulomb from the previous step's normal force, 0 without one.
+    pub damping: f64,
 }
 
 /// The closest contact of `p` with `o` at time `t`: (distance on the particle's side, unit
@@ -87,6 +90,7 @@ pub fn find(
                                 normal_velocity: target,
                                 surface_velocity: vs,
                                 friction: o.friction,
+                                damping: 0.0,
                             },
                         ));
                     }
@@ -275,6 +279,7 @@ mod tests {
             normal_velocity: 0.0,
             surface_velocity: Vec3::ZERO,
             friction: 0.0,
+            damping: 0.0,
         };
         let mut set = ActiveSet::new(vec![ct(0), ct(1)]);
         // identity matrix: the impulse of a contact is n·(dv - rhs)

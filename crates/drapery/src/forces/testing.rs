@@ -29,6 +29,25 @@ pub fn fd_gradient(force: &dyn Force, x: &[Vec3]) -> Vec<Vec3> {
     g
 }
 
+/// `-∂Ψ/∂v` by central differences (step 1e-6) of the dissipation potential `Ψ`: the force
+/// of a damping that has one.
+pub fn fd_dissipation_force(force: &dyn Force, x: &[Vec3], v: &[Vec3]) -> Vec<Vec3> {
+    let mut g = vec![Vec3::ZERO; v.len()];
+    let mut vp = v.to_vec();
+    let e = 1e-6;
+    for i in 0..v.len() {
+        for k in 0..3 {
+            vp[i][k] = v[i][k] + e;
+            let up = force.dissipation(&at(x, &vp));
+            vp[i][k] = v[i][k] - e;
+            let dn = force.dissipation(&at(x, &vp));
+            vp[i][k] = v[i][k];
+            g[i][k] = -(up - dn) / (2.0 * e);
+        }
+    }
+    g
+}
+
 /// Dense `∂f/∂x` (wrt = false) or `∂f/∂v` (wrt = true) by central differences.
 pub fn fd_jacobian(force: &dyn Force, x: &[Vec3], v: &[Vec3], wrt_v: bool) -> Vec<Vec<f64>> {
     fd_jacobian_step(force, x, v, wrt_v, 1e-6)

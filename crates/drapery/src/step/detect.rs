@@ -9,7 +9,10 @@
 //! * cloth–collider contacts: cloth edges and triangles within twice the thickness of a mesh
 //!   collider's sharp edges and vertices become repulsion stencils too
 //!   ([`ObstacleRepulsions`], docs/MATH.md §24), except those of cloth being pushed out of a
-//!   collider it started inside.
+//!   collider it started inside;
+//! * obstacle friction in the solve: each obstacle candidate whose particle was held in the
+//!   previous step gets the lagged Coulomb damping of that step's normal force
+//!   ([`ObstacleFrictions`], docs/MATH.md §25).
 
 use super::guard::Start;
 use super::pose::Pose;
@@ -18,8 +21,9 @@ use crate::collision::obstacle_proximity::{SharpFeatures, obstacle_proximities};
 use crate::collision::proximity::proximities;
 use crate::collision::repulsion::Penalty;
 use crate::constraints::obstacle::{self, ObstacleContact};
+use crate::forces::obstacle_friction;
 use crate::forces::obstacle_repulsion::{lagged_coulomb, sliding};
-use crate::forces::{Force, ObstacleRepulsions, Repulsions};
+use crate::forces::{Force, ObstacleFrictions, ObstacleRepulsions, Repulsions};
 use crate::model::Model;
 
 /// The contacts of one step.
@@ -35,31 +39,38 @@ pub(crate) struct Contacts {
     pub builds: usize,
     /// Cloth–collider repulsion stencils (none without mesh colliders or close pairs).
     pub obstacle_repulsions: Option<ObstacleRepulsions>,
+    /// Friction of the obstacle candidates that have a lagged normal force.
+    pub obstacle_friction: Option<ObstacleFrictions>,
 }
 
 impl Contacts {
-    /// The contact forces of the step: cloth–cloth repulsion, then cloth–collider repulsion.
+    /// The contact forces of the step: cloth–cloth repulsion, cloth–collider repulsion, then
+    /// obstacle friction.
     pub fn forces(&self) -> Vec<&dyn Force> {
         let cloth = self.repulsions.as_ref().map(|r| r as &dyn Force);
         let obstacle = self.obstacle_repulsions.as_ref().map(|r| r as &dyn Force);
-        cloth.into_iter().chain(obstacle).collect()
+        let friction = self.obstacle_friction.as_ref().map(|r| r as &dyn Force);
+        cloth.into_iter().chain(obstacle).chain(friction).collect()
     }
 }
 
-/// The contacts at the start of the step (none with collisions off).
+/// The contacts at the start of the step (none with collisions off). `normal_force` is each
+/// particle's obstacle normal force in the previous step (N; 0 where none held it).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn contacts(
     model: &Model,
     triangles: &[[u32; 3]],
     edges: &[[u32; 2]],
     start: &Start,
     pose: &Pose,
+    normal_force: &[f64],
     exempt: &(dyn Fn(&[u32; 4]) -> bool + Sync),
 ) -> Contacts {
     let Some(c) = &model.collision else {
         return Contacts::default();
     };
     let (x0, v0) = (&start.x0, &start.v0);
-    let obstacle = obstacle::find(
+    let mut obstacle = obstacle::find(
         x0,
         v0,
         &pose.pinned,
@@ -69,6 +80,20 @@ pub(crate) fn contacts(
         c.thickness,
         model.gravity.length() * pose.h,
     );
+    // friction in the solve, lagged Coulomb: the previous step's normal force at the starting
+    // sliding speed (viscous below 1 mm/s)
+    for ct in &mut obstacle {
+        let i = ct.particle as usize;
+        let n = normal_force.get(i).copied().unwrap_or(0.0);
+        let slide = obstacle_friction::sliding(ct, v0[i]).length();
+        ct.damping = lagged_coulomb(ct.friction * n, slide);
+    }
+    let rubbing: Vec<ObstacleContact> = obstacle
+        .iter()
+        .filter(|ct| ct.damping > 0.0 && ct.damping.is_finite())
+        .copied()
+        .collect();
+    let obstacle_friction = (!rubbing.is_empty()).then(|| ObstacleFrictions::new(rubbing));
     let (mut pairs, mut builds) = (0, 0);
     let penalty = Penalty {
         thickness: c.thickness,
@@ -119,6 +144,7 @@ pub(crate) fn contacts(
         candidates: pairs,
         builds,
         obstacle_repulsions,
+        obstacle_friction,
     }
 }
 
@@ -144,7 +170,7 @@ mod tests {
         }
         let (tris, edges) = (m.triangles(), m.edges());
         let pose = pose::at(&m, 0.0, h);
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &|_| false);
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false);
         assert!(
             !c.obstacle.is_empty(),
             "particles 2 mm above the ground touch it"
@@ -156,12 +182,12 @@ mod tests {
         // pin every particle: no stencil and no obstacle contact is left
         m.pinned = vec![true; m.particle_count()];
         let pose = pose::at(&m, 0.0, h);
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &|_| false);
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false);
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
         // collisions off: nothing
         m.collision = None;
         m.pinned = vec![false; m.particle_count()];
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &|_| false);
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false);
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
     }
 
@@ -182,9 +208,11 @@ mod tests {
         let pose = pose::at(&m, 0.0, 0.01);
         let n = m.particle_count();
         let count = |seams: &Seams| {
-            contacts(&m, &tris, &edges, &start, &pose, &|ids| seams.exempt(ids))
-                .repulsions
-                .map_or(0, |r| r.stencils.len())
+            contacts(&m, &tris, &edges, &start, &pose, &[], &|ids| {
+                seams.exempt(ids)
+            })
+            .repulsions
+            .map_or(0, |r| r.stencils.len())
         };
         let all: Vec<[u32; 2]> = (8..16).map(|i| [i, i - 8]).collect();
         let unsewn = count(&Seams::default());

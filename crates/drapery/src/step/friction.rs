@@ -1,6 +1,12 @@
 //! The friction stage: Coulomb friction on the solved velocities, cloth–cloth contacts first,
 //! then obstacle contacts ([`crate::collision::friction`]), and the end-of-step positions.
 //!
+//! Obstacle friction acts twice: in the solve, as the lagged Coulomb damping of the previous
+//! step's normal force ([`crate::forces::ObstacleFrictions`]), and here, as Coulomb friction
+//! with what is left of this step's budget `μ λ` once the solve's friction impulse
+//! `h c |u_t|` is taken off (docs/MATH.md §25): all of it at a first touch, next to nothing on
+//! a contact that rests or slides steadily.
+//!
 //! A held obstacle contact's solved normal displacement (what brings the particle to the
 //! thickness) is kept as a position correction while its normal velocity is set to the
 //! surface's: the particle ends the step at rest on the surface, not flying off it.
@@ -9,6 +15,7 @@ use crate::collision::friction::{apply_contact_friction, apply_obstacle_friction
 use crate::collision::settings::CollisionSettings;
 use crate::constraints::obstacle::ObstacleContact;
 use crate::forces::Repulsions;
+use crate::forces::obstacle_friction::sliding;
 use crate::math::Vec3;
 use crate::model::Model;
 
@@ -39,7 +46,8 @@ pub(crate) fn run(
             h,
         );
     }
-    apply_obstacle_friction(v, &model.mass, contacts, impulse);
+    let left = remaining(contacts, impulse, &solved, h);
+    apply_obstacle_friction(v, &model.mass, contacts, &left);
     for i in 0..x.len() {
         x[i] = x0[i] + h * v[i];
     }
@@ -47,6 +55,24 @@ pub(crate) fn run(
         let i = ct.particle as usize;
         x[i] += h * ct.normal * ct.normal.dot(solved[i] - v[i]);
     }
+}
+
+/// Each held contact's normal impulse `λ` less the friction impulse the solve already applied,
+/// `h c |u_t|` over `μ` (the impulse whose Coulomb budget that was), never below 0: the normal
+/// impulse whose `μ λ` the Coulomb friction after the solve may still use.
+fn remaining(contacts: &[ObstacleContact], impulse: &[f64], solved: &[Vec3], h: f64) -> Vec<f64> {
+    contacts
+        .iter()
+        .zip(impulse)
+        .map(|(ct, &l)| {
+            if ct.damping > 0.0 && ct.friction > 0.0 {
+                let u = sliding(ct, solved[ct.particle as usize]).length();
+                (l - h * ct.damping * u / ct.friction).max(0.0)
+            } else {
+                l
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -69,6 +95,7 @@ mod tests {
             normal_velocity: target,
             surface_velocity: Vec3::ZERO,
             friction: 0.5,
+            damping: 0.0,
         };
         let mut v = vec![Vec3::ZERO; x0.len()];
         v[4] = Vec3::new(1.0, target, 0.0);

@@ -75,6 +75,9 @@ pub struct Simulation {
     /// The previous step's velocity change, the PCG's initial guess for the next step (part of
     /// the state: save and restore it to resume a run bit for bit).
     pub(crate) warm_start: Vec<Vec3>,
+    /// Each particle's obstacle normal force in the previous step (N, 0 where no contact held
+    /// it): the lagged normal force of the friction in the solve (part of the state).
+    pub(crate) normal_force: Vec<f64>,
     forces: Vec<Box<dyn Force>>,
     system: System,
     /// State the simulation was created in (the multigrid's reference, see [`Self::reference`]).
@@ -122,6 +125,7 @@ impl Simulation {
         let strain_limits = StrainLimits::of(&model);
         Ok(Simulation {
             warm_start: vec![Vec3::ZERO; n],
+            normal_force: vec![0.0; n],
             model,
             settings,
             time: 0.0,
@@ -185,6 +189,7 @@ impl Simulation {
                 &self.edges,
                 &start,
                 &pose,
+                &self.normal_force,
                 &|ids| self.seams.exempt(ids) || tangles.exempt(ids, n),
             );
             self.system.use_contacts(&c.forces());
@@ -329,6 +334,10 @@ impl Simulation {
         }
         for i in 0..n {
             self.warm_start[i] = v[i] - start.v0[i];
+        }
+        self.normal_force.fill(0.0);
+        for (ct, l) in held.iter().zip(&impulse) {
+            self.normal_force[ct.particle as usize] = l.max(0.0) / h;
         }
         self.model.x = x;
         self.model.v = v;

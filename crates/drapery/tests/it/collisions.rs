@@ -358,15 +358,21 @@ fn a_sheet_starting_deep_inside_a_sphere_is_pushed_out_at_the_push_speed_and_sta
     let (_, inside) = s.intersections();
     assert!(inside > 0, "the test needs a starting penetration");
     // the deepest vertex is 0.2 m in, pushed out at 0.5 m/s (plus the thickness): 0.42 s,
-    // never faster than that
+    // and no vertex inside is pushed faster than that (the vertices outside are the cloth's:
+    // once the tension of the rising dome beats the friction that holds a corner on the
+    // sphere, the corner slides off as fast as the cloth takes it)
+    let (center, radius) = (Vec3::new(0.0, 0.4, 0.0), 0.3);
     for _ in 0..45 {
+        let inside: Vec<usize> = (s.model().positions().iter().enumerate())
+            .filter(|(_, p)| (**p - center).length() < radius)
+            .map(|(i, _)| i)
+            .collect();
         s.step(0.01).unwrap();
         if s.tangled().inside > 0 {
             assert!(
-                s.model()
-                    .velocities()
+                inside
                     .iter()
-                    .all(|v| v.length() <= 0.5 + 1e-9)
+                    .all(|&i| s.model().velocities()[i].length() <= 0.5 + 1e-9)
             );
         }
     }
