@@ -371,7 +371,7 @@ fn apart_along_closest_axis(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64
     let d = to - from;
     let len = d.length();
     // (the distance bounds the gap on any axis: no axis can do better)
-    if !(len > threshold) {
+    if len <= threshold {
         return false;
     }
     let n = d / len;
@@ -816,7 +816,7 @@ mod tests {
         for k in 0..=2000 {
             let t = k as f64 / 2000.0;
             let d = distance_at(kind, x0, x1, t);
-            if !(d > tol) {
+            if d.is_nan() || d <= tol {
                 return Err(format!(
                     "{kind:?} rejected, but at t = {t} the distance is {d} ≤ {tol}"
                 ));
