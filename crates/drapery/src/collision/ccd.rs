@@ -70,14 +70,14 @@ pub fn edge_edge_gap_toi(x0: &[Vec3; 4], x1: &[Vec3; 4], gap: f64) -> Option<f64
 
 /// False when the moving point `x[0]` and triangle `x[1] x[2] x[3]` cannot come within `tol`
 /// of each other during the step (a cheap conservative test that rejects most broad-phase pairs
-/// of cloth moving together; the queries above start with it).
+/// of cloth moving together; the queries above start with its first part).
 ///
-/// Two tests: [`far_apart`] (the coordinate axes), then, for the pairs it keeps,
-/// [`apart_along_closest_axis`] (the direction between the closest points at the start), which
+/// Two tests: `far_apart` (the coordinate axes), then, for the pairs it keeps,
+/// `apart_along_closest_axis` (the direction between the closest points at the start), which
 /// rejects neighbouring primitives of cloth moving together whatever the surface's orientation.
 /// A pair either test rejects also has no time of impact within `tol` from
-/// [`vertex_triangle_toi`] and stays farther than `tol` from its end (see
-/// [`apart_along_closest_axis`]), so a caller that starts with this test gets the same answers.
+/// [`vertex_triangle_toi`] and ends farther than `tol` apart (docs/MATH.md §16, "Pairs moving
+/// together"), so a caller that starts with this test gets the same answers.
 pub fn vertex_triangle_may_touch(x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> bool {
     may_touch(Kind::VertexTriangle, x0, x1, tol.max(0.0))
 }
