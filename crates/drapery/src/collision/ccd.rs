@@ -70,15 +70,26 @@ pub fn edge_edge_gap_toi(x0: &[Vec3; 4], x1: &[Vec3; 4], gap: f64) -> Option<f64
 
 /// False when the moving point `x[0]` and triangle `x[1] x[2] x[3]` cannot come within `tol`
 /// of each other during the step (a cheap conservative test that rejects most broad-phase pairs
-/// of cloth moving together; the queries above start with it).
+/// of cloth moving together; the queries above start with its first part).
+///
+/// Two tests: `far_apart` (the coordinate axes), then, for the pairs it keeps,
+/// `apart_along_closest_axis` (the direction between the closest points at the start), which
+/// rejects neighbouring primitives of cloth moving together whatever the surface's orientation.
+/// A pair either test rejects also has no time of impact within `tol` from
+/// [`vertex_triangle_toi`] and ends farther than `tol` apart (docs/MATH.md §16, "Pairs moving
+/// together"), so a caller that starts with this test gets the same answers.
 pub fn vertex_triangle_may_touch(x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> bool {
-    !far_apart(Kind::VertexTriangle, x0, x1, tol.max(0.0))
+    may_touch(Kind::VertexTriangle, x0, x1, tol.max(0.0))
 }
 
 /// False when the moving edges `x[0] x[1]` and `x[2] x[3]` cannot come within `tol` of each
 /// other during the step (see [`vertex_triangle_may_touch`]).
 pub fn edge_edge_may_touch(x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> bool {
-    !far_apart(Kind::EdgeEdge, x0, x1, tol.max(0.0))
+    may_touch(Kind::EdgeEdge, x0, x1, tol.max(0.0))
+}
+
+fn may_touch(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> bool {
+    !far_apart(kind, x0, x1, tol) && !apart_along_closest_axis(kind, x0, x1, tol)
 }
 
 /// Positions at time `t`.
@@ -311,6 +322,76 @@ fn far_apart(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> bool {
     }
     let r = tol + 1e-9 * lo.abs().max(hi.abs()).max_element();
     lo.cmpgt(Vec3::splat(r)).any() || hi.cmplt(Vec3::splat(-r)).any()
+}
+
+/// True when the two primitives stay farther apart than `tol` (with the margins below) over the
+/// whole step, shown on one axis: `n`, the unit vector from the closest point of the first
+/// primitive to that of the second at the start of the step (docs/MATH.md §16, "Pairs moving
+/// together"). For any unit `n` and any time `t`, the distance between the two convex primitives
+/// is at least their gap along `n`,
+///
+/// `g(t) = min_{j ∈ second} n·x_j(t) − max_{i ∈ first} n·x_i(t)`,
+///
+/// and with straight-line motion every `n·x_k(t)` is linear in `t`, so `g` (a minimum of linear
+/// functions minus a maximum of linear functions) is concave: on `[0, 1]` it is at least
+/// `min(g(0), g(1))`. At `t = 0` the closest-point direction makes `g(0)` the distance itself;
+/// when the pair moves together (translates, or turns a little, as cloth carried by a spinning
+/// obstacle) `g(1)` stays close to it. [`far_apart`] is the same bound on the coordinate axes,
+/// which cannot separate neighbouring primitives of a tilted surface.
+///
+/// The threshold is not `tol` but what makes [`toi`]'s answer `None` as well, so that the test
+/// only saves work: `min(g(0), g(1)) > tol (1 + 10⁻³) + L / 2048 + 10⁻⁹ X`, with `L` the largest
+/// relative displacement ([`lipschitz`]) and `X` the largest coordinate magnitude of the eight
+/// points. Then every distance [`toi`] evaluates (at rounded positions, by closest-point
+/// routines whose points lie in the primitives: rounding of order `10⁻¹⁵ X`) exceeds its
+/// tolerance `tol + 10⁻¹² size`, and its advancement branch, which accepts within `10⁻³` of
+/// that tolerance and otherwise steps by at least `(g − tol') / L`, leaves `[0, 1]` well within
+/// its 4096 iterations (it would need a gap below `tol' + L / 4096` to hit the cap). The closest
+/// points only choose the axis: a poorly computed axis gives a weaker bound, never a wrong one.
+/// Non-finite input is never rejected.
+fn apart_along_closest_axis(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> bool {
+    if !finite(x0, x1) {
+        return false;
+    }
+    let (from, to) = match kind {
+        Kind::VertexTriangle => {
+            let c = point_triangle(x0[0], x0[1], x0[2], x0[3]);
+            (x0[0], c.q)
+        }
+        Kind::EdgeEdge => {
+            let c = segment_segment(x0[0], x0[1], x0[2], x0[3]);
+            (c.p, c.q)
+        }
+    };
+    let scale = x0
+        .iter()
+        .chain(x1.iter())
+        .fold(0.0f64, |m, v| m.max(v.abs().max_element()));
+    let threshold = tol * (1.0 + 1e-3) + lipschitz(kind, x0, x1) / 2048.0 + 1e-9 * scale;
+    let d = to - from;
+    let len = d.length();
+    // (the distance bounds the gap on any axis: no axis can do better)
+    if len <= threshold {
+        return false;
+    }
+    let n = d / len;
+    let first = match kind {
+        Kind::VertexTriangle => 0..1,
+        Kind::EdgeEdge => 0..2,
+    };
+    let gap = |x: &[Vec3; 4]| {
+        let (mut hi, mut lo) = (f64::NEG_INFINITY, f64::INFINITY);
+        for (i, p) in x.iter().enumerate() {
+            let s = n.dot(*p);
+            if first.contains(&i) {
+                hi = hi.max(s);
+            } else {
+                lo = lo.min(s);
+            }
+        }
+        lo - hi
+    };
+    gap(x0) > threshold && gap(x1) > threshold
 }
 
 fn toi(kind: Kind, x0: &[Vec3; 4], x1: &[Vec3; 4], tol: f64) -> Option<f64> {
@@ -640,6 +721,165 @@ mod tests {
         assert_eq!(edge_edge_toi(&a, &b, TOL), None);
     }
 
+    /// Neighbouring primitives of a grid on a tilted plane, carried together a step's
+    /// displacement (larger than the grid's spacing, as on the spinning sphere): the coordinate
+    /// axes cannot separate them, the closest-point axis does; the same pairs approaching each
+    /// other are kept.
+    #[test]
+    fn the_closest_axis_rejects_neighbours_moving_together_and_keeps_approaching_ones() {
+        let h = 0.0125; // the spacing of spin-129
+        // a vertical sheet (so that the axes cannot separate diagonal neighbours)
+        let (u, v) = (Vec3::new(1.0, 1.0, 0.0).normalize(), Vec3::Z);
+        let at = |i: f64, j: f64| u * (i * h) + v * (j * h) + Vec3::new(0.3, 0.5, -0.2);
+        let shift = Vec3::new(0.012, -0.004, 0.009);
+        let turn = glam::DQuat::from_rotation_y(0.03);
+        // the vertex across a triangle's long side; two parallel diagonals
+        let vt0 = [at(1.0, 1.0), at(0.0, 0.0), at(1.0, 0.0), at(0.0, 1.0)];
+        let ee0 = [at(0.0, 0.0), at(1.0, 1.0), at(1.0, 0.0), at(2.0, 1.0)];
+        let tol = 2e-6;
+        for (kind, x0) in [(Kind::VertexTriangle, vt0), (Kind::EdgeEdge, ee0)] {
+            let x1 = x0.map(|p| turn * p + shift);
+            assert!(
+                !far_apart(kind, &x0, &x1, tol),
+                "{kind:?}: the coordinate axes separate"
+            );
+            assert!(
+                !may_touch(kind, &x0, &x1, tol),
+                "{kind:?}: moving together, kept"
+            );
+            // instead the first primitive moves onto the second's first vertex
+            let mut x1 = x0;
+            let across = x0[if kind == Kind::EdgeEdge { 2 } else { 1 }] - x0[0];
+            x1[0] += across;
+            if kind == Kind::EdgeEdge {
+                x1[1] += across;
+            }
+            assert!(
+                may_touch(kind, &x0, &x1, tol),
+                "{kind:?}: approaching, rejected"
+            );
+        }
+    }
+
+    /// A common motion of a pair (a turn about `axis` through the origin and a shift) plus
+    /// noise of each point's own.
+    struct Motion {
+        noise: [Vec3; 4],
+        noise_scale: f64,
+        shift: Vec3,
+        axis: Vec3,
+        angle: f64,
+    }
+
+    /// The pair `a` with its second primitive moved by `offset`, and its end positions (the same
+    /// for no motion).
+    fn carried_pair(
+        kind: Kind,
+        a: [Vec3; 4],
+        offset: Vec3,
+        motion: Option<Motion>,
+    ) -> ([Vec3; 4], [Vec3; 4]) {
+        let second = if kind == Kind::EdgeEdge { 2..4 } else { 1..4 };
+        let mut x0 = a;
+        for i in second {
+            x0[i] += offset;
+        }
+        let Some(m) = motion else {
+            return (x0, x0);
+        };
+        let turn = glam::DQuat::from_axis_angle(m.axis.try_normalize().unwrap_or(Vec3::Z), m.angle);
+        (
+            x0,
+            std::array::from_fn(|i| turn * x0[i] + m.shift + m.noise[i] * m.noise_scale),
+        )
+    }
+
+    /// When the quick rejection says the pair cannot touch: densely sampled distances stay
+    /// above `tol`, the time-of-impact queries (with `tol` and with 0) find nothing, and the end
+    /// positions are farther apart than `tol` (what the fail-safe's `impact` reads after the
+    /// test). Returns whether the closest axis rejected a pair the coordinate axes kept.
+    fn check_rejection(
+        kind: Kind,
+        x0: &[Vec3; 4],
+        x1: &[Vec3; 4],
+        tol: f64,
+    ) -> Result<bool, String> {
+        let ee = kind == Kind::EdgeEdge;
+        let may = if ee {
+            edge_edge_may_touch(x0, x1, tol)
+        } else {
+            vertex_triangle_may_touch(x0, x1, tol)
+        };
+        if may {
+            return Ok(false);
+        }
+        for k in 0..=2000 {
+            let t = k as f64 / 2000.0;
+            let d = distance_at(kind, x0, x1, t);
+            if d.is_nan() || d <= tol {
+                return Err(format!(
+                    "{kind:?} rejected, but at t = {t} the distance is {d} ≤ {tol}"
+                ));
+            }
+        }
+        let toi = |tol: f64| {
+            if ee {
+                edge_edge_toi(x0, x1, tol)
+            } else {
+                vertex_triangle_toi(x0, x1, tol)
+            }
+        };
+        for t in [tol, 0.0] {
+            if let Some(s) = toi(t) {
+                return Err(format!(
+                    "{kind:?} rejected, but the query with tolerance {t} finds an impact at {s}"
+                ));
+            }
+        }
+        Ok(!far_apart(kind, x0, x1, tol))
+    }
+
+    /// Many pairs carried together a step's displacement of the spinning sphere (up to 5 cm,
+    /// turned up to 0.1 rad) near each other (within 3 cm, primitives of up to 2 cm): every
+    /// rejection is safe ([`check_rejection`]), and the closest axis rejects a good share of
+    /// the pairs the coordinate axes keep (the test is not vacuous).
+    #[test]
+    fn the_closest_axis_rejects_many_pairs_moving_together_and_only_safe_ones() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let mut v3 = |r: f64| Vec3::new(rnd(), rnd(), rnd()) * r;
+        let (mut kept_by_axes, mut rejected_by_closest) = (0, 0);
+        for case in 0..4000 {
+            let kind = if case % 2 == 0 {
+                Kind::EdgeEdge
+            } else {
+                Kind::VertexTriangle
+            };
+            let a = [v3(0.02), v3(0.02), v3(0.02), v3(0.02)];
+            let offset = v3(0.03);
+            let motion = Motion {
+                noise: [v3(1.0), v3(1.0), v3(1.0), v3(1.0)],
+                noise_scale: [0.0, 1e-4, 1e-3][case % 3],
+                shift: v3(0.05),
+                axis: v3(1.0),
+                angle: v3(0.1).x,
+            };
+            let (x0, x1) = carried_pair(kind, a, offset, Some(motion));
+            let tol = 2e-6;
+            kept_by_axes += usize::from(!far_apart(kind, &x0, &x1, tol));
+            rejected_by_closest += usize::from(check_rejection(kind, &x0, &x1, tol).unwrap());
+        }
+        assert!(
+            rejected_by_closest * 4 > kept_by_axes,
+            "{rejected_by_closest} of {kept_by_axes}"
+        );
+    }
+
     fn v3(r: f64) -> impl Strategy<Value = Vec3> {
         (-r..r, -r..r, -r..r).prop_map(|(x, y, z)| Vec3::new(x, y, z))
     }
@@ -733,6 +973,31 @@ mod tests {
                 }
                 let r = if ee { edge_edge_toi(&a, &b, tol) } else { vertex_triangle_toi(&a, &b, tol) };
                 prop_assert_eq!(r, None);
+            }
+        }
+
+        /// Pairs near each other carried by a common motion (a translation and a turn about a
+        /// random axis, as cloth on a spinning sphere) plus noise of their own, or still:
+        /// whenever the quick rejection (both tests) says "cannot touch", the pair never comes
+        /// within `tol` and the queries the fail-safe's `impact` reads after the test find
+        /// nothing ([`check_rejection`]), so rejecting early changes none of its answers.
+        #[test]
+        fn the_closest_axis_rejection_never_drops_a_pair_that_comes_within_the_tolerance(
+            a in prop::array::uniform4(v3(0.02)),
+            offset in v3(0.03),
+            noise in prop::array::uniform4(v3(1.0)),
+            noise_scale in prop::sample::select(vec![0.0, 1e-4, 1e-3, 1e-2]),
+            shift in v3(0.05),
+            axis in v3(1.0),
+            angle in -0.1..0.1f64,
+            tol in prop::sample::select(vec![0.0, 2e-6, 1e-4, 2e-3]),
+            ee in any::<bool>(),
+            still in any::<bool>(),
+        ) {
+            let kind = if ee { Kind::EdgeEdge } else { Kind::VertexTriangle };
+            let (x0, x1) = carried_pair(kind, a, offset, (!still).then_some(Motion { noise, noise_scale, shift, axis, angle }));
+            if let Err(e) = check_rejection(kind, &x0, &x1, tol) {
+                prop_assert!(false, "{}", e);
             }
         }
 
