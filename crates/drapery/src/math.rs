@@ -8,6 +8,12 @@ pub fn outer(a: Vec3, b: Vec3) -> Mat3 {
     Mat3::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
+/// The projector `I - n nᵀ` onto the plane normal to unit `n`.
+#[inline]
+pub fn tangent_projector(n: Vec3) -> Mat3 {
+    Mat3::IDENTITY - outer(n, n)
+}
+
 /// Largest absolute entry of a matrix.
 #[inline]
 pub fn max_abs(m: &Mat3) -> f64 {

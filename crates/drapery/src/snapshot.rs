@@ -231,11 +231,10 @@ impl Snapshot {
         let n = n as usize;
         let mut vecs = || decode_vecs(r.take(24 * n).unwrap_or_default());
         let (x, v, warm_start) = (vecs(), vecs(), vecs());
+        let misfit = || damaged("the particle count or a list length does not match the length");
         let tangles = if v3 {
             (true, Vec::new(), Vec::new())
         } else {
-            let misfit =
-                || damaged("the particle count or a list length does not match the length");
             let found = r.u64().ok_or_else(misfit)? == 1;
             let mut list = || -> Result<Vec<[u32; 2]>> {
                 let len = r.u64().ok_or_else(misfit)?;
@@ -266,9 +265,7 @@ impl Snapshot {
                 .collect()
         };
         if r.at != body.len() || (!v3 && !v4 && normal_force.len() != n) {
-            return Err(damaged(
-                "the particle count or a list length does not match the length",
-            ));
+            return Err(misfit());
         }
         Ok(Snapshot {
             header,

@@ -41,7 +41,7 @@ impl Constraints {
     /// Prescribes the component of particle `i`'s new velocity along unit `n` to be `target`,
     /// from its current velocity `v`: `S = I - n nᵀ`, `z = n (target - n·v)`.
     pub fn hold_normal(&mut self, i: usize, n: Vec3, target: f64, v: Vec3) {
-        self.filter[i] = Mat3::IDENTITY - crate::math::outer(n, n);
+        self.filter[i] = crate::math::tangent_projector(n);
         self.z[i] = n * (target - n.dot(v));
     }
 }

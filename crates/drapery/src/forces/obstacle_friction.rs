@@ -19,7 +19,7 @@
 use super::State;
 use super::stencil::{Full, Gather, StencilForce};
 use crate::constraints::obstacle::ObstacleContact;
-use crate::math::{Mat3, Vec3};
+use crate::math::{Mat3, Vec3, tangent_projector};
 
 /// The in-solve friction of a step's obstacle contacts (those with a positive `damping`).
 #[derive(Clone, Debug)]
@@ -38,11 +38,6 @@ impl ObstacleFrictions {
             sums: Gather::default(),
         }
     }
-}
-
-/// `I - n nᵀ` of contact `c`.
-fn tangential(c: &ObstacleContact) -> Mat3 {
-    Mat3::IDENTITY - crate::math::outer(c.normal, c.normal)
 }
 
 /// The sliding velocity `(I - n nᵀ)(v - v_s)` of contact `c` for the particle's velocity `v`.
@@ -76,7 +71,7 @@ impl StencilForce for ObstacleFrictions {
     }
     fn local_jacobian(&self, s: usize, _at: &State, _a: f64, b: f64) -> [[Mat3; 1]; 1] {
         let c = &self.contacts[s];
-        [[tangential(c) * (-b * c.damping)]]
+        [[tangent_projector(c.normal) * (-b * c.damping)]]
     }
 }
 

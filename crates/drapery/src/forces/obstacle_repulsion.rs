@@ -21,7 +21,7 @@ use super::stencil::{Full, Gather, Local, StencilForce};
 use super::{Linearization, State};
 use crate::collision::obstacle_proximity::ObstacleProximity;
 use crate::collision::repulsion::{Penalty, Repulsion, repulsion};
-use crate::math::{Mat3, Vec3};
+use crate::math::{Mat3, Vec3, tangent_projector};
 
 /// The cloth–collider stencils of a step, sharing one penalty.
 #[derive(Clone, Debug)]
@@ -68,17 +68,12 @@ pub(crate) fn lagged_coulomb(mu_n: f64, slide: f64) -> f64 {
     mu_n / slide.max(SLIP)
 }
 
-/// The tangential projector `I - n nᵀ` of stencil `st` (its normal at the start of the step).
-fn tangential(st: &ObstacleProximity) -> Mat3 {
-    Mat3::IDENTITY - crate::math::outer(st.normal, st.normal)
-}
-
 /// The sliding velocity `(I - n nᵀ)(Σ wᵢ vᵢ - v_q)` of stencil `st`.
 pub(crate) fn sliding(st: &ObstacleProximity, v: &[Vec3]) -> Vec3 {
     let u: Vec3 = (0..3)
         .map(|a| v[st.particles[a] as usize] * st.weights[a])
         .sum();
-    tangential(st) * (u - st.velocity)
+    tangent_projector(st.normal) * (u - st.velocity)
 }
 
 /// The cloth particles' forces: the penalty's and the damping `-c wᵢ (I - n nᵀ) u`.
@@ -89,7 +84,7 @@ fn cloth_forces(r: &Repulsion, st: &ObstacleProximity, v: &[Vec3]) -> [Vec3; 3] 
 
 /// The blocks among the cloth particles of `a ∂f/∂x + b ∂f/∂v`.
 fn cloth_blocks(r: &Repulsion, st: &ObstacleProximity, a: f64, b: f64) -> [[Mat3; 3]; 3] {
-    let d = tangential(st) * (-b * st.damping);
+    let d = tangent_projector(st.normal) * (-b * st.damping);
     let w = st.weights;
     std::array::from_fn(|i| std::array::from_fn(|j| a * r.jac[i][j] + d * (w[i] * w[j])))
 }
