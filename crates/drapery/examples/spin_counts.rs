@@ -249,8 +249,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "step newton solves cg cg/solve held stencils prox_pairs bp_builds ccd_pairs ccd_rounds ccd_hits setups"
             );
             let mut sum = [0usize; 11];
+            let mut times = drapery::StageTimes::default();
             for k in 0..count {
                 let r = sim.step(h)?;
+                let t = &r.stages;
+                for (a, b) in times.fields_mut().into_iter().zip(t.fields()) {
+                    *a += b;
+                }
                 let row = [
                     r.newton_iterations as usize,
                     r.linear_solves,
@@ -288,6 +293,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .map(|&s| format!("{:.1}", s as f64 / count as f64))
                 .collect();
             println!("mean {}", m.join(" "));
+            let ms: Vec<String> = (drapery::StageTimes::NAMES.iter().zip(times.fields()))
+                .map(|(name, s)| format!("{name} {:.2}", 1e3 * s / count as f64))
+                .collect();
+            println!("ms/step {}", ms.join(" "));
         }
         _ => return Err(usage.into()),
     }

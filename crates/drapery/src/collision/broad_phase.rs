@@ -1,29 +1,35 @@
 //! Broad phase: candidate vertex–triangle and edge–edge pairs for deforming triangle meshes.
 //!
-//! Contract: [`candidates`] reports exactly the pairs whose *swept* boxes (the axis-aligned box of
-//! the primitive's vertices at the start and at the end of the step) come within `margin` of each
-//! other (each box is inflated by `margin / 2`, boxes touching counts as overlapping), excluding
-//! pairs that share a vertex. Several meshes are handled by concatenating their vertex arrays
-//! (offsetting indices). The output is sorted and free of duplicates, so it is the same for the
-//! same input whatever the number of threads (queries run on rayon's pool).
+//! Contract: [`candidates`] reports exactly the pairs whose *moving boxes* meet: each primitive's
+//! box at the start of the step (inflated by `margin / 2`) plus `t` times the box of its vertices'
+//! displacements must overlap the other's at one common time `t ∈ [0, 1]` (closed boxes: touching
+//! counts; [`MovingBox::meets`]), excluding pairs that share a vertex. A pair whose points come
+//! within `margin` of each other at some time of the step is always among them (the vertices
+//! moving linearly). Several meshes are handled by concatenating their vertex arrays (offsetting
+//! indices). The output is sorted and free of duplicates, so it is the same for the same input
+//! whatever the number of threads.
 //!
-//! [`SweptBoxes`] keeps the boxes and their hashes of one step for repeated use: the continuous
-//! collision fail-safe pulls a few vertices back along their paths, round after round, and a
-//! pulled-back vertex stays inside its swept box, so the pairs of a later round are among the
-//! first round's; [`SweptBoxes::touching`] lists the ones that involve given vertices without
-//! rebuilding anything.
+//! [`SweptBoxes`] keeps the hierarchies of one step for repeated use: the continuous collision
+//! fail-safe pulls a few vertices back along their paths, round after round;
+//! [`SweptBoxes::touching`] refits the hierarchies to the new motion and lists only the pairs
+//! that involve given vertices.
 //!
-//! Method: a uniform spatial hash whose cell size is twice the mean extent of the inserted boxes. A pair
-//! of boxes is reported from one cell only (the cell holding the lowest corner of their
-//! intersection), so no list needs deduplicating. Boxes covering too many cells (very fast or
-//! very large primitives) are kept aside in a list checked against every query, so the cost stays
-//! bounded and nothing is lost. Boxes with non-finite coordinates never overlap anything.
+//! Method: bounding-volume hierarchies over the vertices, triangles and edges
+//! ([`super::bvh`]), built by median splits at every [`SweptBoxes::new`]; a shared motion (cloth
+//! carried along by a turning obstacle) does not make neighbours candidates, as swept boxes
+//! would. Boxes with non-finite coordinates never meet anything.
+//!
+//! [`overlapping_pairs`] and [`overlapping_pairs_between`] (static boxes) use a uniform spatial
+//! hash whose cell size is twice the mean extent of the inserted boxes. A pair of boxes is
+//! reported from one cell only (the cell holding the lowest corner of their intersection), so no
+//! list needs deduplicating. Boxes covering too many cells are kept aside in a list checked
+//! against every query.
 
+use super::bvh::{Bvh, MovingBox, TreeCache};
 use crate::math::Vec3;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
-use std::sync::OnceLock;
 
 /// An axis-aligned bounding box (closed).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -110,29 +116,21 @@ pub fn candidates(
     edges: &[[u32; 2]],
     margin: f64,
 ) -> Candidates {
-    let boxes = SweptBoxes::new(x0, x1, triangles, edges, margin);
-    Candidates {
-        vt: boxes.vertex_triangle_map(|v, t| Some((v, t))),
-        ee: boxes.edge_edge_map(|a, b| Some((a, b))),
-    }
+    SweptBoxes::new(x0, x1, triangles, edges, margin).all()
 }
 
-/// The swept boxes of a mesh over one step and their spatial hashes (see the module docs).
+/// The moving boxes of a mesh over one step and their hierarchies (see the module docs).
 pub struct SweptBoxes<'a> {
     half_margin: f64,
     triangles: &'a [[u32; 3]],
     edges: &'a [[u32; 2]],
-    vboxes: Vec<Aabb>,
-    tboxes: Vec<Aabb>,
-    eboxes: Vec<Aabb>,
-    tgrid: Grid,
-    egrid: Grid,
-    /// Hash of the vertex boxes, built on the first [`SweptBoxes::touching`] that needs it.
-    vgrid: OnceLock<Grid>,
+    vertices: Bvh,
+    tris: Bvh,
+    edge_tree: Bvh,
 }
 
 impl<'a> SweptBoxes<'a> {
-    /// Boxes and hashes for the motion `x0 → x1` (arguments as for [`candidates`]).
+    /// Boxes and hierarchies for the motion `x0 → x1` (arguments as for [`candidates`]).
     pub fn new(
         x0: &[Vec3],
         x1: &[Vec3],
@@ -140,46 +138,59 @@ impl<'a> SweptBoxes<'a> {
         edges: &'a [[u32; 2]],
         margin: f64,
     ) -> SweptBoxes<'a> {
+        Self::cached(x0, x1, triangles, edges, margin, &mut TreeCache::default())
+    }
+
+    /// As [`SweptBoxes::new`], growing the hierarchies on the orders `cache` kept from an
+    /// earlier step of the same mesh (the result is the same).
+    pub fn cached(
+        x0: &[Vec3],
+        x1: &[Vec3],
+        triangles: &'a [[u32; 3]],
+        edges: &'a [[u32; 2]],
+        margin: f64,
+        cache: &mut TreeCache,
+    ) -> SweptBoxes<'a> {
         let r = 0.5 * margin.max(0.0);
-        let swept = |idx: &[u32]| {
-            Aabb::of_points(idx.iter().flat_map(|&i| [x0[i as usize], x1[i as usize]])).inflated(r)
+        let boxes = |idx: &[u32]| MovingBox::of(idx, x0, x1, r);
+        let each = |n: usize, f: &(dyn Fn(u32) -> MovingBox + Sync)| -> Vec<MovingBox> {
+            (0..n as u32)
+                .into_par_iter()
+                .with_min_len(1024)
+                .map(f)
+                .collect()
         };
-        let vboxes: Vec<Aabb> = (0..x0.len() as u32)
-            .into_par_iter()
-            .with_min_len(1024)
-            .map(|v| swept(&[v]))
-            .collect();
-        let tboxes: Vec<Aabb> = triangles
-            .par_iter()
-            .with_min_len(1024)
-            .map(|t| swept(t))
-            .collect();
-        let eboxes: Vec<Aabb> = edges
-            .par_iter()
-            .with_min_len(1024)
-            .map(|e| swept(e))
-            .collect();
-        let (tgrid, egrid) = rayon::join(|| Grid::build(&tboxes), || Grid::build(&eboxes));
+        let [vertices, tris, edge_tree] = cache.trees([
+            each(x0.len(), &|v| boxes(&[v])),
+            each(triangles.len(), &|t| boxes(&triangles[t as usize])),
+            each(edges.len(), &|e| boxes(&edges[e as usize])),
+        ]);
         SweptBoxes {
             half_margin: r,
             triangles,
             edges,
-            vboxes,
-            tboxes,
-            eboxes,
-            tgrid,
-            egrid,
-            vgrid: OnceLock::new(),
+            vertices,
+            tris,
+            edge_tree,
+        }
+    }
+
+    /// Every candidate (as [`candidates`] lists them).
+    pub fn all(&self) -> Candidates {
+        Candidates {
+            vt: self.vertex_triangle(&self.vertices, &self.tris),
+            ee: self.edge_edge(&self.edge_tree),
         }
     }
 
     /// `f(vertex, triangle)` over every vertex–triangle candidate, in sorted order, keeping the
-    /// `Some` results (a filter and a narrow phase in one pass, without storing the pairs).
+    /// `Some` results (a filter and a narrow phase in one pass).
     pub fn vertex_triangle_map<T: Send>(
         &self,
         f: impl Fn(u32, u32) -> Option<T> + Sync + Send,
     ) -> Vec<T> {
-        map_pairs(self.vboxes.len(), |v, out| self.triangles_near(v, out), f)
+        let pairs = self.vertex_triangle(&self.vertices, &self.tris);
+        pairs.par_iter().filter_map(|&(v, t)| f(v, t)).collect()
     }
 
     /// `f(a, b)` over every edge–edge candidate `a < b`, in sorted order, keeping the `Some`
@@ -188,129 +199,49 @@ impl<'a> SweptBoxes<'a> {
         &self,
         f: impl Fn(u32, u32) -> Option<T> + Sync + Send,
     ) -> Vec<T> {
-        map_pairs(self.eboxes.len(), |a, out| self.edges_near(a, out), f)
+        let pairs = self.edge_edge(&self.edge_tree);
+        pairs.par_iter().filter_map(|&(a, b)| f(a, b)).collect()
+    }
+
+    fn vertex_triangle(&self, vertices: &Bvh, tris: &Bvh) -> Vec<(u32, u32)> {
+        let tri = self.triangles;
+        vertices.pairs_with(tris, &|v, t| !tri[t as usize].contains(&v))
+    }
+
+    fn edge_edge(&self, edges: &Bvh) -> Vec<(u32, u32)> {
+        let e = self.edges;
+        edges.self_pairs(&|a, b| !shares_vertex(e[a as usize], e[b as usize]))
     }
 
     /// The candidates of the motion `x0 → x1` (as [`candidates`] would list them) that involve
-    /// at least one vertex `i` with `moved[i]` (`moved.len()` = the vertex count). Every vertex's
-    /// path must stay inside its swept box of [`SweptBoxes::new`] (as when vertices are moved
-    /// back along their paths): the hashes of the first motion find the pairs, and the current
-    /// boxes decide.
+    /// at least one vertex `i` with `moved[i]` (`moved.len()` = the vertex count), for the same
+    /// mesh: the hierarchies of [`SweptBoxes::new`] refitted to the new motion.
     pub fn touching(&self, moved: &[bool], x0: &[Vec3], x1: &[Vec3]) -> Candidates {
-        let swept = |idx: &[u32]| {
-            Aabb::of_points(idx.iter().flat_map(|&i| [x0[i as usize], x1[i as usize]]))
-                .inflated(self.half_margin)
-        };
+        let r = self.half_margin;
+        let boxes = |idx: &[u32]| MovingBox::of(idx, x0, x1, r);
+        let (tri, edge) = (self.triangles, self.edges);
         let dirty = |idx: &[u32]| idx.iter().any(|&i| moved[i as usize]);
-        let tri = |t: u32| self.triangles[t as usize];
-        let edge = |e: u32| self.edges[e as usize];
-        // `f(item, current box, out)` lists its pairs into `out`, for each item in parallel
-        fn pairs<F>(items: Vec<u32>, f: F) -> Vec<(u32, u32)>
-        where
-            F: Fn(u32, &mut Vec<u32>, &mut Vec<(u32, u32)>) + Sync + Send,
-        {
-            let mut out: Vec<(u32, u32)> = items
-                .into_par_iter()
-                .fold(
-                    || (Vec::new(), Vec::new()),
-                    |(mut scratch, mut out), i| {
-                        f(i, &mut scratch, &mut out);
-                        (scratch, out)
-                    },
-                )
-                .map(|(_, out)| out)
-                .flatten_iter()
-                .collect();
-            out.par_sort_unstable();
-            out.dedup();
-            out
+        let refit = |tree: &Bvh, f: &(dyn Fn(u32) -> MovingBox + Sync), m: &(dyn Fn(u32) -> bool + Sync)| {
+            let mut t = tree.refit(f);
+            t.mark(m);
+            t
+        };
+        let vertices = refit(&self.vertices, &|v| boxes(&[v]), &|v| moved[v as usize]);
+        let tris = refit(
+            &self.tris,
+            &|t| boxes(&tri[t as usize]),
+            &|t| dirty(&tri[t as usize]),
+        );
+        let edges = refit(
+            &self.edge_tree,
+            &|e| boxes(&edge[e as usize]),
+            &|e| dirty(&edge[e as usize]),
+        );
+        Candidates {
+            vt: self.vertex_triangle(&vertices, &tris),
+            ee: self.edge_edge(&edges),
         }
-        let moved_vertices: Vec<u32> = (0..self.vboxes.len() as u32)
-            .filter(|&v| moved[v as usize])
-            .collect();
-        let dirty_triangles: Vec<u32> = (0..self.triangles.len() as u32)
-            .into_par_iter()
-            .filter(|&t| dirty(&tri(t)))
-            .collect();
-        let dirty_edges: Vec<u32> = (0..self.edges.len() as u32)
-            .into_par_iter()
-            .filter(|&e| dirty(&edge(e)))
-            .collect();
-        let vgrid = (!dirty_triangles.is_empty())
-            .then(|| self.vgrid.get_or_init(|| Grid::build(&self.vboxes)));
-        let mut vt = pairs(moved_vertices, |v, scratch, out| {
-            let b = swept(&[v]);
-            self.tgrid.query(&b, &self.tboxes, None, scratch);
-            out.extend(
-                scratch
-                    .iter()
-                    .filter(|&&t| !tri(t).contains(&v) && b.overlaps(&swept(&tri(t))))
-                    .map(|&t| (v, t)),
-            );
-        });
-        if let Some(vgrid) = vgrid {
-            vt.extend(pairs(dirty_triangles, |t, scratch, out| {
-                let b = swept(&tri(t));
-                vgrid.query(&b, &self.vboxes, None, scratch);
-                out.extend(
-                    scratch
-                        .iter()
-                        .filter(|&&v| !tri(t).contains(&v) && b.overlaps(&swept(&[v])))
-                        .map(|&v| (v, t)),
-                );
-            }));
-            vt.par_sort_unstable();
-            vt.dedup();
-        }
-        let ee = pairs(dirty_edges, |a, scratch, out| {
-            let b = swept(&edge(a));
-            self.egrid.query(&b, &self.eboxes, None, scratch);
-            out.extend(
-                scratch
-                    .iter()
-                    .filter(|&&f| {
-                        f != a && !shares_vertex(edge(a), edge(f)) && b.overlaps(&swept(&edge(f)))
-                    })
-                    .map(|&f| (a.min(f), a.max(f))),
-            );
-        });
-        Candidates { vt, ee }
     }
-
-    /// Triangles whose box overlaps vertex `v`'s and that do not contain `v`, sorted.
-    fn triangles_near(&self, v: u32, out: &mut Vec<u32>) {
-        self.tgrid
-            .query(&self.vboxes[v as usize], &self.tboxes, None, out);
-        out.retain(|&t| !self.triangles[t as usize].contains(&v));
-        out.sort_unstable();
-    }
-
-    /// Edges `b > a` whose box overlaps edge `a`'s and that share no vertex with it, sorted.
-    fn edges_near(&self, a: u32, out: &mut Vec<u32>) {
-        self.egrid
-            .query(&self.eboxes[a as usize], &self.eboxes, Some(a), out);
-        let ea = self.edges[a as usize];
-        out.retain(|&b| !shares_vertex(ea, self.edges[b as usize]));
-        out.sort_unstable();
-    }
-}
-
-/// `f(i, j)` for `i` in `0..count` and each `j` that `near(i, ..)` lists, in that order,
-/// keeping the `Some` results (in parallel, the order independent of the thread count).
-fn map_pairs<T: Send>(
-    count: usize,
-    near: impl Fn(u32, &mut Vec<u32>) + Sync + Send,
-    f: impl Fn(u32, u32) -> Option<T> + Sync + Send,
-) -> Vec<T> {
-    let lists: Vec<Vec<T>> = (0..count as u32)
-        .into_par_iter()
-        .with_min_len(64)
-        .map_init(Vec::new, |scratch, i| {
-            near(i, scratch);
-            scratch.iter().filter_map(|&j| f(i, j)).collect()
-        })
-        .collect();
-    lists.into_iter().flatten().collect()
 }
 
 fn shares_vertex(a: [u32; 2], b: [u32; 2]) -> bool {
@@ -570,20 +501,18 @@ mod tests {
         margin: f64,
     ) -> Candidates {
         let r = 0.5 * margin;
-        let sw = |idx: &[u32]| {
-            Aabb::of_points(idx.iter().flat_map(|&i| [x0[i as usize], x1[i as usize]])).inflated(r)
-        };
+        let sw = |idx: &[u32]| MovingBox::of(idx, x0, x1, r);
         let mut c = Candidates::default();
         for v in 0..x0.len() as u32 {
             for (t, tri) in tris.iter().enumerate() {
-                if !tri.contains(&v) && sw(&[v]).overlaps(&sw(tri)) {
+                if !tri.contains(&v) && sw(&[v]).meets(&sw(tri)) {
                     c.vt.push((v, t as u32));
                 }
             }
         }
         for (a, ea) in edges.iter().enumerate() {
             for (b, eb) in edges.iter().enumerate().skip(a + 1) {
-                if !(ea.contains(&eb[0]) || ea.contains(&eb[1])) && sw(ea).overlaps(&sw(eb)) {
+                if !(ea.contains(&eb[0]) || ea.contains(&eb[1])) && sw(ea).meets(&sw(eb)) {
                     c.ee.push((a as u32, b as u32));
                 }
             }
@@ -624,7 +553,7 @@ mod tests {
                 *p += Vec3::new(rnd(), rnd(), rnd()) * amp;
             }
             let mut x1: Vec<Vec3> = x0.iter().map(|p| *p + Vec3::new(rnd(), rnd(), rnd()) * motion).collect();
-            // a few very fast vertices to exercise the large-box path
+            // a few very fast vertices (long moving boxes)
             for _ in 0..fast {
                 let i = ((rnd() * 0.5 + 0.5) * (x1.len() - 1) as f64) as usize;
                 x1[i] += Vec3::new(rnd(), rnd(), rnd()) * 50.0;
@@ -668,12 +597,25 @@ mod tests {
     }
 
     #[test]
-    fn the_hash_matches_brute_force_on_sheets_large_enough_to_use_it() {
-        // a few thousand boxes: the queries go through the cells, not the scan-everything path
+    fn the_hierarchy_matches_brute_force_on_sheets_large_enough_to_split_in_parallel() {
+        // a few thousand boxes: the traversals split across threads
         for (seed, motion) in [(1, 0.0), (2, 0.01), (3, 0.05)] {
             let (x0, x1, tris, edges) = crumpled(seed, 24, motion);
             let got = candidates(&x0, &x1, &tris, &edges, 0.02);
             assert!(got.vt.len() > 1000 && got.ee.len() > 1000);
+            assert_eq!(got, brute(&x0, &x1, &tris, &edges, 0.02));
+        }
+    }
+
+    /// Trees grown on the order kept from other positions of the same mesh find the same
+    /// candidates: the cache changes the speed only.
+    #[test]
+    fn a_kept_tree_order_finds_the_same_candidates() {
+        let mut cache = TreeCache::default();
+        for (seed, motion) in [(1, 0.0), (2, 0.05), (3, 0.02), (4, 0.3)] {
+            let (x0, x1, tris, edges) = crumpled(seed, 16, motion);
+            let got = SweptBoxes::cached(&x0, &x1, &tris, &edges, 0.02, &mut cache).all();
+            assert!(!got.vt.is_empty() && !got.ee.is_empty());
             assert_eq!(got, brute(&x0, &x1, &tris, &edges, 0.02));
         }
     }

@@ -16,6 +16,7 @@
 //!   rounding hid a crossing.
 
 use super::broad_phase::SweptBoxes;
+use super::bvh::TreeCache;
 use super::ccd::{
     edge_edge_gap_toi, edge_edge_may_touch, edge_edge_toi, vertex_triangle_gap_toi,
     vertex_triangle_may_touch, vertex_triangle_toi,
@@ -173,7 +174,9 @@ fn sweep(o: &Obstacle, x0: Vec3, x1: Vec3, t0: f64, h: f64, stop: f64) -> Option
 /// through the contact pairs for which `exempt` is true (those within a stitched neighbourhood,
 /// so that seams can close, [`super::seams::Seams::exempt`]; starting tangles). Pair particles
 /// from `x0.len()` on are obstacle vertices.
-/// Returns the report, or a message when collisions could not be resolved.
+/// Returns the report, or a message when collisions could not be resolved. `cache` keeps the
+/// broad phase's tree orders from step to step (speed only: the result is the same with a new
+/// one).
 #[allow(clippy::too_many_arguments)]
 pub fn failsafe(
     x0: &[Vec3],
@@ -187,6 +190,7 @@ pub fn failsafe(
     thickness: f64,
     self_collision: bool,
     exempt: &(dyn Fn(&[u32; 4]) -> bool + Sync),
+    cache: &mut TreeCache,
 ) -> Result<FailsafeReport, String> {
     let n = x0.len();
     let mut report = FailsafeReport::default();
@@ -300,7 +304,7 @@ pub fn failsafe(
     // Pulled-back vertices stay on their paths, inside the swept boxes of the first round, so
     // the boxes are built once and later rounds re-test only the pairs of the vertices that
     // moved (rebuilt when a vertex is carried by an obstacle instead: that leaves its box).
-    let mut boxes = SweptBoxes::new(&ys0, &ye, &tris, &all_edges, tol);
+    let mut boxes = SweptBoxes::cached(&ys0, &ye, &tris, &all_edges, tol, cache);
     report.builds += 1;
     let mut hits = all_hits(&boxes, &ye);
     let mut moved = vec![false; ye.len()];
@@ -358,7 +362,7 @@ pub fn failsafe(
             };
         }
         if carry_changed {
-            boxes = SweptBoxes::new(&ys0, &ye, &tris, &all_edges, tol);
+            boxes = SweptBoxes::cached(&ys0, &ye, &tris, &all_edges, tol, cache);
             report.builds += 1;
             hits = all_hits(&boxes, &ye);
             continue;
@@ -502,7 +506,7 @@ mod tests {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                 pool.install(|| {
                     let mut got = x1.clone();
-                    let r = failsafe(&x0, &mut got, &pinned, &tris, &edges, &[], 0.0, 0.01, 0.005, true, &|_| false);
+                    let r = failsafe(&x0, &mut got, &pinned, &tris, &edges, &[], 0.0, 0.01, 0.005, true, &|_| false, &mut TreeCache::default());
                     (got, r)
                 })
             };
@@ -553,6 +557,7 @@ mod tests {
                 thickness,
                 true,
                 &|_| false,
+                &mut TreeCache::default(),
             );
             r.unwrap();
             x = x1;
@@ -581,6 +586,7 @@ mod tests {
             0.005,
             true,
             &|_| false,
+            &mut TreeCache::default(),
         )
         .unwrap_err();
         assert!(e.contains("particles 0 (pinned)"), "{e}");

@@ -19,6 +19,7 @@
 //!   with the exact orientation tests of [`predicates`].
 
 pub mod broad_phase;
+pub mod bvh;
 pub mod ccd;
 pub mod check;
 pub mod colliders;

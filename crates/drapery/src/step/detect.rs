@@ -16,7 +16,8 @@
 
 use super::guard::Start;
 use super::pose::Pose;
-use crate::collision::broad_phase::candidates;
+use crate::collision::broad_phase::SweptBoxes;
+use crate::collision::bvh::TreeCache;
 use crate::collision::obstacle_proximity::{SharpFeatures, obstacle_proximities};
 use crate::collision::proximity::proximities;
 use crate::collision::repulsion::Penalty;
@@ -55,7 +56,8 @@ impl Contacts {
 }
 
 /// The contacts at the start of the step (none with collisions off). `normal_force` is each
-/// particle's obstacle normal force in the previous step (N; 0 where none held it).
+/// particle's obstacle normal force in the previous step (N; 0 where none held it); `cache`
+/// keeps the broad phase's tree orders from step to step (speed only).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn contacts(
     model: &Model,
@@ -65,6 +67,7 @@ pub(crate) fn contacts(
     pose: &Pose,
     normal_force: &[f64],
     exempt: &(dyn Fn(&[u32; 4]) -> bool + Sync),
+    cache: &mut TreeCache,
 ) -> Contacts {
     let Some(c) = &model.collision else {
         return Contacts::default();
@@ -101,7 +104,7 @@ pub(crate) fn contacts(
         tangential: false,
     };
     let repulsions = if c.self_collision {
-        let cand = candidates(x0, x0, triangles, edges, c.thickness);
+        let cand = SweptBoxes::cached(x0, x0, triangles, edges, c.thickness, cache).all();
         (pairs, builds) = (cand.vt.len() + cand.ee.len(), 1);
         let mut stencils = proximities(x0, triangles, edges, &cand, c.thickness);
         stencils.retain(|s| {
@@ -170,7 +173,7 @@ mod tests {
         }
         let (tris, edges) = (m.triangles(), m.edges());
         let pose = pose::at(&m, 0.0, h);
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false);
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false, &mut TreeCache::default());
         assert!(
             !c.obstacle.is_empty(),
             "particles 2 mm above the ground touch it"
@@ -182,12 +185,12 @@ mod tests {
         // pin every particle: no stencil and no obstacle contact is left
         m.pinned = vec![true; m.particle_count()];
         let pose = pose::at(&m, 0.0, h);
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false);
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false, &mut TreeCache::default());
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
         // collisions off: nothing
         m.collision = None;
         m.pinned = vec![false; m.particle_count()];
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false);
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false, &mut TreeCache::default());
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
     }
 
@@ -210,7 +213,7 @@ mod tests {
         let count = |seams: &Seams| {
             contacts(&m, &tris, &edges, &start, &pose, &[], &|ids| {
                 seams.exempt(ids)
-            })
+            }, &mut TreeCache::default())
             .repulsions
             .map_or(0, |r| r.stencils.len())
         };

@@ -4,13 +4,14 @@
 //! theirs (a position correction, not a motion).
 
 use super::pose::Pose;
+use crate::collision::bvh::TreeCache;
 use crate::collision::failsafe::{FailsafeReport, failsafe};
 use crate::collision::settings::CollisionSettings;
 use crate::math::Vec3;
 use crate::model::Model;
 
 /// Corrects the end-of-step positions `x` (and the velocities of the particles it moved),
-/// letting through the pairs `exempt` names (see [`failsafe`]); returns what it did (colliding
+/// letting through the pairs `exempt` names (see [`crate::collision::failsafe::failsafe`]); returns what it did (colliding
 /// pairs CCD found, pairs tested, rounds, swept-box builds), or why collisions could not be
 /// resolved.
 #[allow(clippy::too_many_arguments)]
@@ -24,6 +25,7 @@ pub(crate) fn run(
     x0: &[Vec3],
     x: &mut [Vec3],
     v: &mut [Vec3],
+    cache: &mut TreeCache,
 ) -> Result<FailsafeReport, String> {
     let h = pose.h;
     let before = x.to_vec();
@@ -39,6 +41,7 @@ pub(crate) fn run(
         settings.thickness,
         settings.self_collision,
         exempt,
+        cache,
     )?;
     let mut keep_velocity = vec![false; x.len()];
     r.projected
@@ -87,6 +90,7 @@ mod tests {
             &x0,
             &mut x,
             &mut v,
+            &mut TreeCache::default(),
         )
         .unwrap();
         assert!(x[0].y >= 0.0 && x[0].y < x0[0].y, "{}", x[0]);
@@ -126,6 +130,7 @@ mod tests {
                 &x0,
                 &mut x,
                 &mut v,
+                &mut TreeCache::default(),
             )
             .unwrap();
             x

@@ -42,6 +42,7 @@ pub use report::{StageTimes, StepReport};
 pub use settings::{LinearSolver, SolverSettings};
 pub use tangles::Tangled;
 
+use crate::collision::bvh::TreeCache;
 use crate::collision::seams::Seams;
 use crate::constraints::obstacle::ActiveSet;
 use crate::constraints::strain_limit::StrainLimits;
@@ -92,7 +93,17 @@ pub struct Simulation {
     /// state: a snapshot holds it).
     pub(crate) tangles: Tangles,
     work: Work,
+    /// The broad phase's tree orders, kept between steps (speed only: no result depends on
+    /// them, and a snapshot does not hold them).
+    trees: Trees,
     solvers: Solvers,
+}
+
+/// The tree orders of the detect and fail-safe stages' broad phases.
+#[derive(Clone, Debug, Default)]
+struct Trees {
+    detect: TreeCache,
+    failsafe: TreeCache,
 }
 
 /// Per-particle work vectors of a step, kept between steps.
@@ -138,6 +149,7 @@ impl Simulation {
             seams,
             strain_limits,
             tangles: Tangles::default(),
+            trees: Trees::default(),
             work: Work::default(),
             solvers: Solvers::default(),
         })
@@ -191,6 +203,7 @@ impl Simulation {
                 &pose,
                 &self.normal_force,
                 &|ids| self.seams.exempt(ids) || tangles.exempt(ids, n),
+                &mut self.trees.detect,
             );
             self.system.use_contacts(&c.forces());
             c
@@ -308,6 +321,7 @@ impl Simulation {
                     &start.x0,
                     &mut x,
                     &mut v,
+                    &mut self.trees.failsafe,
                 )
             })
             .map_err(|e| at.fail(e))?;

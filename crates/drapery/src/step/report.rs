@@ -32,19 +32,49 @@ pub struct StageTimes {
 }
 
 impl StageTimes {
+    /// The stages' names, in the order of [`StageTimes::fields`].
+    pub const NAMES: [&'static str; 11] = [
+        "guard", "pose", "detect", "linearize", "constrain", "solve", "update", "friction",
+        "strain", "failsafe", "commit",
+    ];
+
+    /// Every stage's seconds, in the order they run.
+    pub fn fields(&self) -> [f64; 11] {
+        [
+            self.guard,
+            self.pose,
+            self.detect,
+            self.linearize,
+            self.constrain,
+            self.solve,
+            self.update,
+            self.friction,
+            self.strain,
+            self.failsafe,
+            self.commit,
+        ]
+    }
+
+    /// Every stage's seconds, mutably, in the order of [`StageTimes::fields`].
+    pub fn fields_mut(&mut self) -> [&mut f64; 11] {
+        [
+            &mut self.guard,
+            &mut self.pose,
+            &mut self.detect,
+            &mut self.linearize,
+            &mut self.constrain,
+            &mut self.solve,
+            &mut self.update,
+            &mut self.friction,
+            &mut self.strain,
+            &mut self.failsafe,
+            &mut self.commit,
+        ]
+    }
+
     /// The sum of every stage.
     pub fn total(&self) -> f64 {
-        self.guard
-            + self.pose
-            + self.detect
-            + self.linearize
-            + self.constrain
-            + self.solve
-            + self.update
-            + self.friction
-            + self.strain
-            + self.failsafe
-            + self.commit
+        self.fields().iter().sum()
     }
 }
 

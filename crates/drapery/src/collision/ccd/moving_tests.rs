@@ -38,6 +38,7 @@
 
 use super::{edge_edge_toi, vertex_triangle_toi};
 use crate::collision::colliders::{Collider, Motion, Shape, TriangleMesh};
+use crate::collision::bvh::TreeCache;
 use crate::collision::failsafe::failsafe;
 use crate::collision::predicates::orient3d;
 use crate::collision::settings::Obstacle;
@@ -628,6 +629,7 @@ fn failsafe_keeps_particles_on_their_side_of_a_moving_mesh() {
         0.005,
         false,
         &|_| false,
+        &mut TreeCache::default(),
     )
     .unwrap();
     assert!(report.ccd_hits >= 4, "{report:?}");
