@@ -136,7 +136,7 @@ fn pcg_solve(bencher: Bencher, n: usize) {
     });
 }
 
-/// Swept-box candidates of the pile after it has folded onto itself.
+/// Broad-phase candidates of the pile after it has folded onto itself (trees built anew).
 #[divan::bench(args = [32, 64])]
 fn broad_phase(bencher: Bencher, n: usize) {
     let mut sim = Preset::Pile.simulation(n, 1e-3).unwrap();

@@ -25,7 +25,7 @@ use crate::math::Vec3;
 use rayon::prelude::*;
 
 /// Most primitives in a leaf.
-pub const LEAF: usize = 4;
+pub const LEAF: usize = 8;
 
 /// Subtrees of more primitives than this are traversed in parallel.
 const PARALLEL: u32 = 2048;
