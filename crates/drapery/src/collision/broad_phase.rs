@@ -183,26 +183,6 @@ impl<'a> SweptBoxes<'a> {
         }
     }
 
-    /// `f(vertex, triangle)` over every vertex–triangle candidate, in sorted order, keeping the
-    /// `Some` results (a filter and a narrow phase in one pass).
-    pub fn vertex_triangle_map<T: Send>(
-        &self,
-        f: impl Fn(u32, u32) -> Option<T> + Sync + Send,
-    ) -> Vec<T> {
-        let pairs = self.vertex_triangle(&self.vertices, &self.tris);
-        pairs.par_iter().filter_map(|&(v, t)| f(v, t)).collect()
-    }
-
-    /// `f(a, b)` over every edge–edge candidate `a < b`, in sorted order, keeping the `Some`
-    /// results.
-    pub fn edge_edge_map<T: Send>(
-        &self,
-        f: impl Fn(u32, u32) -> Option<T> + Sync + Send,
-    ) -> Vec<T> {
-        let pairs = self.edge_edge(&self.edge_tree);
-        pairs.par_iter().filter_map(|&(a, b)| f(a, b)).collect()
-    }
-
     fn vertex_triangle(&self, vertices: &Bvh, tris: &Bvh) -> Vec<(u32, u32)> {
         let tri = self.triangles;
         vertices.pairs_with(tris, &|v, t| !tri[t as usize].contains(&v))

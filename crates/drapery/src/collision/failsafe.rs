@@ -15,7 +15,7 @@
 //!   at all): pulled back step after step, a pair could otherwise creep toward touching until
 //!   rounding hid a crossing.
 
-use super::broad_phase::SweptBoxes;
+use super::broad_phase::{Candidates, SweptBoxes};
 use super::bvh::TreeCache;
 use super::ccd::{
     edge_edge_gap_toi, edge_edge_may_touch, edge_edge_toi, vertex_triangle_gap_toi,
@@ -45,6 +45,11 @@ pub struct FailsafeReport {
     /// obstacle and were only projected out at the end of the step: their displacement is a
     /// position correction, not a velocity.
     pub projected: Vec<u32>,
+    /// When continuous collision detection ran and moved no vertex: the cloth's vertex–triangle
+    /// and edge–edge pairs whose moving boxes meet with the thickness as margin, a superset of
+    /// the pairs within the thickness at the end positions (the next step's proximity
+    /// candidates, [`super::broad_phase::candidates`] at those positions, among them).
+    pub pairs: Option<Candidates>,
 }
 
 /// Rounds of pull-back before vertices go all the way back to their start.
@@ -292,11 +297,13 @@ pub fn failsafe(
     // Colliding pairs keyed (0, vertex, triangle) or (1, edge, edge): vertex–triangle first, then
     // edge–edge, each sorted, whatever the thread count.
     type Hits = BTreeMap<(u8, u32, u32), ([u32; 4], f64)>;
-    let all_hits = |boxes: &SweptBoxes, ye: &[Vec3]| -> Hits {
-        let vt = boxes
-            .vertex_triangle_map(|v, t| impact(vt_ids(v, t), true, ye).map(|h| ((0, v, t), h)));
-        let ee =
-            boxes.edge_edge_map(|e, f| impact(ee_ids(e, f), false, ye).map(|h| ((1, e, f), h)));
+    let all_hits = |cand: &Candidates, ye: &[Vec3]| -> Hits {
+        let vt: Vec<_> = (cand.vt.par_iter())
+            .filter_map(|&(v, t)| impact(vt_ids(v, t), true, ye).map(|h| ((0, v, t), h)))
+            .collect();
+        let ee: Vec<_> = (cand.ee.par_iter())
+            .filter_map(|&(e, f)| impact(ee_ids(e, f), false, ye).map(|h| ((1, e, f), h)))
+            .collect();
         vt.into_iter().chain(ee).collect()
     };
     let mut ye: Vec<Vec3> = start.clone();
@@ -304,9 +311,24 @@ pub fn failsafe(
     // Pulled-back vertices stay on their paths, inside the swept boxes of the first round, so
     // the boxes are built once and later rounds re-test only the pairs of the vertices that
     // moved (rebuilt when a vertex is carried by an obstacle instead: that leaves its box).
-    let mut boxes = SweptBoxes::cached(&ys0, &ye, &tris, &all_edges, tol, cache);
+    // (the margin is the thickness, not `tol`: the pairs are then also the next step's
+    // proximity candidates when no vertex has to move; more pairs, the same hits)
+    let margin = thickness.max(tol);
+    let mut boxes = SweptBoxes::cached(&ys0, &ye, &tris, &all_edges, margin, cache);
     report.builds += 1;
-    let mut hits = all_hits(&boxes, &ye);
+    let first = boxes.all();
+    let mut hits = all_hits(&first, &ye);
+    if hits.is_empty() {
+        // the cloth's own pairs: cloth vertices, triangles and edges come first
+        let (nt, ne) = (triangles.len() as u32, edges.len() as u32);
+        report.pairs = Some(Candidates {
+            vt: (first.vt.iter().copied())
+                .filter(|&(v, t)| (v as usize) < n && t < nt)
+                .collect(),
+            ee: first.ee.iter().copied().filter(|&(_, b)| b < ne).collect(),
+        });
+    }
+    drop(first);
     let mut moved = vec![false; ye.len()];
     // Every round that finds a hit changes some vertex (a pull-back, or a carry), or makes no
     // progress and fails; after the partial rounds a vertex only goes back once and a carry only
@@ -362,9 +384,9 @@ pub fn failsafe(
             };
         }
         if carry_changed {
-            boxes = SweptBoxes::cached(&ys0, &ye, &tris, &all_edges, tol, cache);
+            boxes = SweptBoxes::cached(&ys0, &ye, &tris, &all_edges, margin, cache);
             report.builds += 1;
-            hits = all_hits(&boxes, &ye);
+            hits = all_hits(&boxes.all(), &ye);
             continue;
         }
         let cand = boxes.touching(&moved, &ys0, &ye);
@@ -484,6 +506,50 @@ mod tests {
             .filter(|e| seen.insert((e[0].min(e[1]), e[0].max(e[1]))))
             .collect();
         (x0, x1, tris, edges)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+
+        /// The pairs passed on for the next step hold every proximity candidate of the end
+        /// positions (the broad phase run on them with the thickness as margin).
+        #[test]
+        fn the_pairs_passed_on_hold_the_next_steps_candidates(
+            seed in any::<u64>(), n in 3usize..9, depth in 0.0..0.02f64,
+        ) {
+            let (x0, mut x1, tris, edges) = crossing_sheets(seed, n, depth);
+            let thickness = 0.01;
+            let pinned = vec![false; x0.len()];
+            let r = failsafe(&x0, &mut x1, &pinned, &tris, &edges, &[], 0.0, 0.01, thickness, true, &|_| false, &mut TreeCache::default()).unwrap();
+            prop_assert_eq!(r.pairs.is_some(), r.ccd_hits == 0);
+            if let Some(p) = r.pairs {
+                let want = candidates(&x1, &x1, &tris, &edges, thickness);
+                for pair in &want.vt {
+                    prop_assert!(p.vt.binary_search(pair).is_ok(), "{:?}", pair);
+                }
+                for pair in &want.ee {
+                    prop_assert!(p.ee.binary_search(pair).is_ok(), "{:?}", pair);
+                }
+                if depth == 0.0 {
+                    prop_assert!(!want.vt.is_empty());
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn sheets_at_rest_pass_their_close_pairs_on() {
+        let (x0, _, tris, edges) = crossing_sheets(7, 6, 0.0);
+        let x1 = x0.clone();
+        let mut end = x1.clone();
+        let pinned = vec![false; x0.len()];
+        let r = failsafe(&x0, &mut end, &pinned, &tris, &edges, &[], 0.0, 0.01, 0.01, true, &|_| false, &mut TreeCache::default()).unwrap();
+        assert_eq!(end, x1);
+        let p = r.pairs.expect("nothing moved");
+        let want = candidates(&x1, &x1, &tris, &edges, 0.01);
+        assert!(!want.vt.is_empty() && !want.ee.is_empty());
+        assert!(want.vt.iter().all(|c| p.vt.contains(c)));
+        assert!(want.ee.iter().all(|c| p.ee.contains(c)));
     }
 
     proptest! {

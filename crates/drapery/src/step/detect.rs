@@ -16,7 +16,7 @@
 
 use super::guard::Start;
 use super::pose::Pose;
-use crate::collision::broad_phase::SweptBoxes;
+use crate::collision::broad_phase::{Candidates, SweptBoxes};
 use crate::collision::bvh::TreeCache;
 use crate::collision::obstacle_proximity::{SharpFeatures, obstacle_proximities};
 use crate::collision::proximity::proximities;
@@ -34,9 +34,9 @@ pub(crate) struct Contacts {
     pub obstacle: Vec<ObstacleContact>,
     /// Cloth–cloth repulsion stencils (none without self-collision or close pairs).
     pub repulsions: Option<Repulsions>,
-    /// Broad-phase candidate pairs of the self-contacts.
+    /// Candidate pairs of the self-contacts (the broad phase's, or the previous fail-safe's).
     pub candidates: usize,
-    /// Broad-phase builds (1 with self-collision, else 0).
+    /// Broad-phase builds (1 with self-collision unless the pairs were known, else 0).
     pub builds: usize,
     /// Cloth–collider repulsion stencils (none without mesh colliders or close pairs).
     pub obstacle_repulsions: Option<ObstacleRepulsions>,
@@ -57,7 +57,9 @@ impl Contacts {
 
 /// The contacts at the start of the step (none with collisions off). `normal_force` is each
 /// particle's obstacle normal force in the previous step (N; 0 where none held it); `cache`
-/// keeps the broad phase's tree orders from step to step (speed only).
+/// keeps the broad phase's tree orders from step to step (speed only); `known`, when given,
+/// holds every cloth pair within the thickness at the start positions (the previous step's
+/// fail-safe found them), so the broad phase need not run.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn contacts(
     model: &Model,
@@ -68,6 +70,7 @@ pub(crate) fn contacts(
     normal_force: &[f64],
     exempt: &(dyn Fn(&[u32; 4]) -> bool + Sync),
     cache: &mut TreeCache,
+    known: Option<&Candidates>,
 ) -> Contacts {
     let Some(c) = &model.collision else {
         return Contacts::default();
@@ -104,9 +107,17 @@ pub(crate) fn contacts(
         tangential: false,
     };
     let repulsions = if c.self_collision {
-        let cand = SweptBoxes::cached(x0, x0, triangles, edges, c.thickness, cache).all();
-        (pairs, builds) = (cand.vt.len() + cand.ee.len(), 1);
-        let mut stencils = proximities(x0, triangles, edges, &cand, c.thickness);
+        let found;
+        let cand = match known {
+            Some(k) => k,
+            None => {
+                found = SweptBoxes::cached(x0, x0, triangles, edges, c.thickness, cache).all();
+                builds = 1;
+                &found
+            }
+        };
+        pairs = cand.vt.len() + cand.ee.len();
+        let mut stencils = proximities(x0, triangles, edges, cand, c.thickness);
         stencils.retain(|s| {
             s.particles.iter().any(|&p| !pose.pinned[p as usize]) && !exempt(&s.particles)
         });
@@ -173,7 +184,7 @@ mod tests {
         }
         let (tris, edges) = (m.triangles(), m.edges());
         let pose = pose::at(&m, 0.0, h);
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false, &mut TreeCache::default());
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false, &mut TreeCache::default(), None);
         assert!(
             !c.obstacle.is_empty(),
             "particles 2 mm above the ground touch it"
@@ -185,12 +196,12 @@ mod tests {
         // pin every particle: no stencil and no obstacle contact is left
         m.pinned = vec![true; m.particle_count()];
         let pose = pose::at(&m, 0.0, h);
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false, &mut TreeCache::default());
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false, &mut TreeCache::default(), None);
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
         // collisions off: nothing
         m.collision = None;
         m.pinned = vec![false; m.particle_count()];
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false, &mut TreeCache::default());
+        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false, &mut TreeCache::default(), None);
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
     }
 
@@ -213,7 +224,7 @@ mod tests {
         let count = |seams: &Seams| {
             contacts(&m, &tris, &edges, &start, &pose, &[], &|ids| {
                 seams.exempt(ids)
-            }, &mut TreeCache::default())
+            }, &mut TreeCache::default(), None)
             .repulsions
             .map_or(0, |r| r.stencils.len())
         };

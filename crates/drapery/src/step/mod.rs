@@ -42,6 +42,7 @@ pub use report::{StageTimes, StepReport};
 pub use settings::{LinearSolver, SolverSettings};
 pub use tangles::Tangled;
 
+use crate::collision::broad_phase::Candidates;
 use crate::collision::bvh::TreeCache;
 use crate::collision::seams::Seams;
 use crate::constraints::obstacle::ActiveSet;
@@ -96,6 +97,9 @@ pub struct Simulation {
     /// The broad phase's tree orders, kept between steps (speed only: no result depends on
     /// them, and a snapshot does not hold them).
     trees: Trees,
+    /// The cloth's pairs the last fail-safe found near its end positions, with those positions
+    /// (used by the next detect stage only if the positions are still the same, bit for bit).
+    next_pairs: Option<(Vec<Vec3>, Candidates)>,
     solvers: Solvers,
 }
 
@@ -150,6 +154,7 @@ impl Simulation {
             strain_limits,
             tangles: Tangles::default(),
             trees: Trees::default(),
+            next_pairs: None,
             work: Work::default(),
             solvers: Solvers::default(),
         })
@@ -204,6 +209,9 @@ impl Simulation {
                 &self.normal_force,
                 &|ids| self.seams.exempt(ids) || tangles.exempt(ids, n),
                 &mut self.trees.detect,
+                (self.next_pairs.as_ref())
+                    .filter(|(x, _)| *x == start.x0)
+                    .map(|(_, c)| c),
             );
             self.system.use_contacts(&c.forces());
             c
@@ -325,6 +333,7 @@ impl Simulation {
                 )
             })
             .map_err(|e| at.fail(e))?;
+            self.next_pairs = r.pairs.map(|p| (x.clone(), p));
             report.ccd_hits = r.ccd_hits;
             report.ccd_candidates = r.candidates;
             report.ccd_rounds = r.rounds;

@@ -107,15 +107,16 @@ pub struct StepReport {
     pub self_contacts: usize,
     /// Pairs the continuous collision fail-safe had to stop.
     pub ccd_hits: usize,
-    /// Candidate pairs of the self-contact broad phase at the start of the step (the narrow
-    /// phase keeps those closer than the thickness as stencils).
+    /// Candidate pairs of the self-contacts at the start of the step (the broad phase's, or
+    /// those the previous step's fail-safe passed on; the narrow phase keeps those closer than
+    /// the thickness as stencils).
     pub proximity_candidates: usize,
     /// Candidate pairs whose times of impact the fail-safe tested, over its rounds.
     pub ccd_candidates: usize,
     /// Rounds of the fail-safe's continuous collision detection.
     pub ccd_rounds: usize,
-    /// Broad-phase builds (swept boxes and their hashes): the detect stage's and the
-    /// fail-safe's.
+    /// Broad-phase builds (moving boxes and their hierarchies): the detect stage's (none when
+    /// the previous fail-safe passed its pairs on) and the fail-safe's.
     pub broad_phase_builds: usize,
     /// Edges left longer than their strain limit allows: the correction's sweeps ran out
     /// because pins or handles hold them apart (0 without strain limits).
