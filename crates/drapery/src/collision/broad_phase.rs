@@ -201,22 +201,20 @@ impl<'a> SweptBoxes<'a> {
         let boxes = |idx: &[u32]| MovingBox::of(idx, x0, x1, r);
         let (tri, edge) = (self.triangles, self.edges);
         let dirty = |idx: &[u32]| idx.iter().any(|&i| moved[i as usize]);
-        let refit = |tree: &Bvh, f: &(dyn Fn(u32) -> MovingBox + Sync), m: &(dyn Fn(u32) -> bool + Sync)| {
+        let refit = |tree: &Bvh,
+                     f: &(dyn Fn(u32) -> MovingBox + Sync),
+                     m: &(dyn Fn(u32) -> bool + Sync)| {
             let mut t = tree.refit(f);
             t.mark(m);
             t
         };
         let vertices = refit(&self.vertices, &|v| boxes(&[v]), &|v| moved[v as usize]);
-        let tris = refit(
-            &self.tris,
-            &|t| boxes(&tri[t as usize]),
-            &|t| dirty(&tri[t as usize]),
-        );
-        let edges = refit(
-            &self.edge_tree,
-            &|e| boxes(&edge[e as usize]),
-            &|e| dirty(&edge[e as usize]),
-        );
+        let tris = refit(&self.tris, &|t| boxes(&tri[t as usize]), &|t| {
+            dirty(&tri[t as usize])
+        });
+        let edges = refit(&self.edge_tree, &|e| boxes(&edge[e as usize]), &|e| {
+            dirty(&edge[e as usize])
+        });
         Candidates {
             vt: self.vertex_triangle(&vertices, &tris),
             ee: self.edge_edge(&edges),

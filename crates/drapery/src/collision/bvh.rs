@@ -14,9 +14,9 @@
 //! longest axis, halving down to leaves of at most [`LEAF`], and each node holds the union of its
 //! subtree's `B` and `D`. A tree can also be grown on a given order ([`Bvh::with_order`]): the
 //! order of an earlier step's tree, since a mesh's patches stay patches as it moves
-//! ([`TreeCache`]); only the boxes are new. A node pair is pruned when, on some axis, the two cannot overlap at any
-//! time of the step ([`MovingBox::may_meet`]: the union over `t` of `B + tD`, a looser test than
-//! a common `t`, cheap enough for every node pair visited).
+//! ([`TreeCache`]); only the boxes are new. A node pair is pruned when, on some axis, the two
+//! cannot overlap at any time of the step ([`MovingBox::may_meet`]: the union over `t` of
+//! `B + tD`, a looser test than a common `t`, cheap enough for every node pair visited).
 //!
 //! The traversals return their pairs sorted, so the result does not depend on the tree's shape
 //! or on the number of threads.
@@ -96,16 +96,21 @@ impl MovingBox {
     /// difference of their positions, `p + t q`, keeps one sign on that axis over `t ∈ [0, 1]`).
     pub fn may_meet(&self, o: &MovingBox) -> bool {
         // (false for NaN: an empty box meets nothing)
-        let axis = |lo: f64, hi: f64, dlo: f64, dhi: f64, olo: f64, ohi: f64, odlo: f64, odhi: f64| {
-            let (q_lo, q_hi) = (dlo - odhi, dhi - odlo);
-            let low = lo - ohi + if q_lo < 0.0 { q_lo } else { 0.0 };
-            let high = hi - olo + if q_hi > 0.0 { q_hi } else { 0.0 };
-            low <= 0.0 && high >= 0.0
-        };
+        let axis =
+            |lo: f64, hi: f64, dlo: f64, dhi: f64, olo: f64, ohi: f64, odlo: f64, odhi: f64| {
+                let (q_lo, q_hi) = (dlo - odhi, dhi - odlo);
+                let low = lo - ohi + if q_lo < 0.0 { q_lo } else { 0.0 };
+                let high = hi - olo + if q_hi > 0.0 { q_hi } else { 0.0 };
+                low <= 0.0 && high >= 0.0
+            };
         let (a, b) = (self, o);
-        axis(a.lo.x, a.hi.x, a.dlo.x, a.dhi.x, b.lo.x, b.hi.x, b.dlo.x, b.dhi.x)
-            && axis(a.lo.y, a.hi.y, a.dlo.y, a.dhi.y, b.lo.y, b.hi.y, b.dlo.y, b.dhi.y)
-            && axis(a.lo.z, a.hi.z, a.dlo.z, a.dhi.z, b.lo.z, b.hi.z, b.dlo.z, b.dhi.z)
+        axis(
+            a.lo.x, a.hi.x, a.dlo.x, a.dhi.x, b.lo.x, b.hi.x, b.dlo.x, b.dhi.x,
+        ) && axis(
+            a.lo.y, a.hi.y, a.dlo.y, a.dhi.y, b.lo.y, b.hi.y, b.dlo.y, b.dhi.y,
+        ) && axis(
+            a.lo.z, a.hi.z, a.dlo.z, a.dhi.z, b.lo.z, b.hi.z, b.dlo.z, b.dhi.z,
+        )
     }
 
     /// True when the two boxes overlap at some common time `t ∈ [0, 1]` (closed boxes: touching
@@ -151,7 +156,11 @@ impl TreeCache {
     pub fn trees(&mut self, boxes: [Vec<MovingBox>; 3]) -> [Bvh; 3] {
         let fits = self.orders.len() == 3
             && self.uses < Self::REUSE
-            && self.orders.iter().zip(&boxes).all(|(o, b)| o.len() == b.len());
+            && self
+                .orders
+                .iter()
+                .zip(&boxes)
+                .all(|(o, b)| o.len() == b.len());
         let [a, b, c] = boxes;
         let orders = std::mem::take(&mut self.orders);
         let tree = |k: usize, b: Vec<MovingBox>| match fits {
@@ -318,7 +327,9 @@ impl Bvh {
     }
 
     fn node_marked(&self, at: At) -> bool {
-        self.marks.as_ref().is_some_and(|(_, n)| n[at.node as usize])
+        self.marks
+            .as_ref()
+            .is_some_and(|(_, n)| n[at.node as usize])
     }
 
     fn prim_marked(&self, i: usize) -> bool {
@@ -634,17 +645,26 @@ mod tests {
         // moving boxes never meet
         let x0 = [Vec3::ZERO, Vec3::X];
         let x1 = [Vec3::new(10.0, 0.0, 0.0), Vec3::new(11.0, 0.0, 0.0)];
-        let (a, b) = (MovingBox::of(&[0], &x0, &x1, 0.1), MovingBox::of(&[1], &x0, &x1, 0.1));
+        let (a, b) = (
+            MovingBox::of(&[0], &x0, &x1, 0.1),
+            MovingBox::of(&[1], &x0, &x1, 0.1),
+        );
         assert!(!a.meets(&b) && !a.may_meet(&b));
         // head-on, they meet halfway
         let x1 = [Vec3::X, Vec3::ZERO];
-        let (a, b) = (MovingBox::of(&[0], &x0, &x1, 0.0), MovingBox::of(&[1], &x0, &x1, 0.0));
+        let (a, b) = (
+            MovingBox::of(&[0], &x0, &x1, 0.0),
+            MovingBox::of(&[1], &x0, &x1, 0.0),
+        );
         assert!(a.meets(&b));
         // crossing on different axes at different times: each axis overlaps at some time, but
         // never both at once
         let x0 = [Vec3::ZERO, Vec3::new(-0.5, -1.5, 0.0)];
         let x1 = [Vec3::ZERO, Vec3::new(1.5, 0.5, 0.0)];
-        let (a, b) = (MovingBox::of(&[0], &x0, &x1, 0.0), MovingBox::of(&[1], &x0, &x1, 0.0));
+        let (a, b) = (
+            MovingBox::of(&[0], &x0, &x1, 0.0),
+            MovingBox::of(&[1], &x0, &x1, 0.0),
+        );
         assert!(a.may_meet(&b) && !a.meets(&b));
         let nan = [Vec3::new(f64::NAN, 0.0, 0.0)];
         let e = MovingBox::of(&[0], &nan, &nan, 1.0);

@@ -16,7 +16,7 @@
 //!   rounding hid a crossing.
 
 use super::broad_phase::{Candidates, SweptBoxes};
-use super::bvh::TreeCache;
+use super::bvh::{MovingBox, TreeCache};
 use super::ccd::{
     edge_edge_gap_toi, edge_edge_may_touch, edge_edge_toi, vertex_triangle_gap_toi,
     vertex_triangle_may_touch, vertex_triangle_toi,
@@ -297,11 +297,19 @@ pub fn failsafe(
     // Colliding pairs keyed (0, vertex, triangle) or (1, edge, edge): vertex–triangle first, then
     // edge–edge, each sorted, whatever the thread count.
     type Hits = BTreeMap<(u8, u32, u32), ([u32; 4], f64)>;
+    // the candidates come with the thickness as margin (for the next step's detect stage, see
+    // below); only those whose moving boxes meet with `tol` as margin can hit
+    let r = 0.5 * tol;
+    let meet = |a: &[u32], b: &[u32], ye: &[Vec3]| {
+        MovingBox::of(a, &ys0, ye, r).meets(&MovingBox::of(b, &ys0, ye, r))
+    };
     let all_hits = |cand: &Candidates, ye: &[Vec3]| -> Hits {
         let vt: Vec<_> = (cand.vt.par_iter())
+            .filter(|&&(v, t)| meet(&[v], &tris[t as usize], ye))
             .filter_map(|&(v, t)| impact(vt_ids(v, t), true, ye).map(|h| ((0, v, t), h)))
             .collect();
         let ee: Vec<_> = (cand.ee.par_iter())
+            .filter(|&&(e, f)| meet(&all_edges[e as usize], &all_edges[f as usize], ye))
             .filter_map(|&(e, f)| impact(ee_ids(e, f), false, ye).map(|h| ((1, e, f), h)))
             .collect();
         vt.into_iter().chain(ee).collect()
@@ -391,17 +399,7 @@ pub fn failsafe(
         }
         let cand = boxes.touching(&moved, &ys0, &ye);
         hits.retain(|_, (ids, _)| !ids.iter().any(|&i| moved[i as usize]));
-        let vt: Vec<_> = cand
-            .vt
-            .par_iter()
-            .filter_map(|&(v, t)| impact(vt_ids(v, t), true, &ye).map(|h| ((0, v, t), h)))
-            .collect();
-        let ee: Vec<_> = cand
-            .ee
-            .par_iter()
-            .filter_map(|&(e, f)| impact(ee_ids(e, f), false, &ye).map(|h| ((1, e, f), h)))
-            .collect();
-        hits.extend(vt.into_iter().chain(ee));
+        hits.extend(all_hits(&cand, &ye));
     }
     Err(format!(
         "collisions could not be resolved after {max_rounds} rounds of continuous collision detection"
@@ -543,7 +541,21 @@ mod tests {
         let x1 = x0.clone();
         let mut end = x1.clone();
         let pinned = vec![false; x0.len()];
-        let r = failsafe(&x0, &mut end, &pinned, &tris, &edges, &[], 0.0, 0.01, 0.01, true, &|_| false, &mut TreeCache::default()).unwrap();
+        let r = failsafe(
+            &x0,
+            &mut end,
+            &pinned,
+            &tris,
+            &edges,
+            &[],
+            0.0,
+            0.01,
+            0.01,
+            true,
+            &|_| false,
+            &mut TreeCache::default(),
+        )
+        .unwrap();
         assert_eq!(end, x1);
         let p = r.pairs.expect("nothing moved");
         let want = candidates(&x1, &x1, &tris, &edges, 0.01);

@@ -54,6 +54,22 @@ fn unit_or(v: Vec3, fallback: Vec3) -> Vec3 {
     }
 }
 
+/// False when every point of the segment or triangle `points` is farther than `thickness` from
+/// every point of `others`: their bounding balls about the centroids are that far apart (with a
+/// relative `10⁻⁹` to spare, so that no pair the exact distance keeps is dropped by rounding). A
+/// cheap first test: most broad-phase candidates of a smooth sheet are neighbours a few edges
+/// apart, which it rejects before the closest-point computation.
+fn may_be_within(points: &[Vec3], others: &[Vec3], thickness: f64) -> bool {
+    let ball = |p: &[Vec3]| {
+        let c = p.iter().copied().sum::<Vec3>() / p.len() as f64;
+        let r = p.iter().map(|q| (*q - c).length()).fold(0.0, f64::max);
+        (c, r)
+    };
+    let ((c, r), (d, s)) = (ball(points), ball(others));
+    let gap = (c - d).length() - r - s;
+    !(gap > thickness * (1.0 + 1e-9) + 1e-12 * (c.abs().max_element() + d.abs().max_element()))
+}
+
 /// Close pairs (distance `< thickness`) among the candidates, at positions `x`.
 pub fn proximities(
     x: &[Vec3],
@@ -70,6 +86,9 @@ pub fn proximities(
             let tri = triangles[t as usize];
             let [a, b, c] = tri.map(|i| x[i as usize]);
             let p = x[v as usize];
+            if !may_be_within(&[p], &[a, b, c], thickness) {
+                return None;
+            }
             let r = point_triangle(p, a, b, c);
             (r.dist < thickness).then(|| {
                 let fallback = unit_or((b - a).cross(c - a), Vec3::Z);
@@ -90,6 +109,9 @@ pub fn proximities(
             let (ea, eb) = (edges[e as usize], edges[f as usize]);
             let [p0, p1] = ea.map(|i| x[i as usize]);
             let [q0, q1] = eb.map(|i| x[i as usize]);
+            if !may_be_within(&[p0, p1], &[q0, q1], thickness) {
+                return None;
+            }
             let r = segment_segment(p0, p1, q0, q1);
             let interior = r.s > 0.0 && r.s < 1.0 && r.t > 0.0 && r.t < 1.0;
             (r.dist < thickness && interior).then(|| {
@@ -114,6 +136,37 @@ mod tests {
     use super::*;
     use crate::collision::broad_phase::candidates;
     use crate::mesh::Mesh;
+    use proptest::prelude::*;
+
+    fn point() -> impl Strategy<Value = Vec3> {
+        (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64).prop_map(|(x, y, z)| Vec3::new(x, y, z))
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+
+        /// The ball test never drops a pair closer than the thickness, and does drop pairs
+        /// farther than their extents plus the thickness.
+        #[test]
+        fn the_ball_test_keeps_every_close_pair(
+            p in point(), a in point(), b in point(), c in point(), d in point(),
+            thickness in 0.0..1.0f64,
+        ) {
+            let tri = point_triangle(p, a, b, c).dist;
+            if tri < thickness {
+                prop_assert!(may_be_within(&[p], &[a, b, c], thickness));
+            }
+            let seg = segment_segment(p, a, b, c).dist;
+            if seg < thickness {
+                prop_assert!(may_be_within(&[p, a], &[b, c], thickness));
+            }
+            // far apart: rejected
+            let far = Vec3::splat(10.0);
+            prop_assert!(!may_be_within(&[p + far], &[a, b, c], thickness));
+            prop_assert!(!may_be_within(&[p + far, a + far], &[b, c], thickness));
+            prop_assert!(!may_be_within(&[d + far], &[d], thickness));
+        }
+    }
 
     #[test]
     fn stencils_reproduce_the_distance_and_find_all_close_pairs() {

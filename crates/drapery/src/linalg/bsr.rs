@@ -60,6 +60,67 @@ impl BlockMatrix {
         }
     }
 
+    /// A matrix (values zero) whose pattern is this one's plus `(i, j)` and `(j, i)` for every
+    /// pair given: the same pattern as [`BlockMatrix::from_pairs`] of this pattern's pairs and
+    /// these, built by merging each row with its few new columns instead of sorting every row.
+    pub fn with_pairs(&self, pairs: &[(u32, u32)]) -> Self {
+        let n = self.n();
+        let mut extra: Vec<(u32, u32)> = pairs
+            .iter()
+            .filter(|(i, j)| i != j)
+            .flat_map(|&(i, j)| [(i, j), (j, i)])
+            .collect();
+        extra.sort_unstable();
+        extra.dedup();
+        let p = &*self.pattern;
+        let mut row_ptr = Vec::with_capacity(n + 1);
+        let mut col = Vec::with_capacity(p.col.len() + extra.len());
+        let mut diag = Vec::with_capacity(n);
+        row_ptr.push(0u32);
+        let mut e = 0;
+        for i in 0..n {
+            let start = col.len();
+            let old = &p.col[p.row_ptr[i] as usize..p.row_ptr[i + 1] as usize];
+            let end = e + extra[e..].partition_point(|&(r, _)| r as usize == i);
+            let new = &extra[e..end];
+            e = end;
+            let (mut a, mut b) = (0, 0);
+            while a < old.len() || b < new.len() {
+                let next = match (old.get(a), new.get(b).map(|&(_, c)| c)) {
+                    (Some(&x), Some(y)) if x == y => {
+                        b += 1;
+                        a += 1;
+                        x
+                    }
+                    (Some(&x), Some(y)) if x < y => {
+                        a += 1;
+                        x
+                    }
+                    (Some(_), Some(y)) | (None, Some(y)) => {
+                        b += 1;
+                        y
+                    }
+                    (Some(&x), None) => {
+                        a += 1;
+                        x
+                    }
+                    (None, None) => break,
+                };
+                if next as usize == i {
+                    diag.push(col.len() as u32);
+                }
+                col.push(next);
+            }
+            debug_assert!(diag.len() == i + 1 && col.len() > start);
+            row_ptr.push(col.len() as u32);
+        }
+        let nnz = col.len();
+        BlockMatrix {
+            pattern: Arc::new(Pattern { row_ptr, col, diag }),
+            values: vec![Mat3::ZERO; nnz],
+        }
+    }
+
     /// The shared pattern.
     pub fn pattern(&self) -> &Arc<Pattern> {
         &self.pattern
@@ -234,6 +295,29 @@ pub(crate) fn row_chunks<'a, T>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Adding pairs to a pattern gives the pattern of all the pairs at once.
+        #[test]
+        fn adding_pairs_to_a_pattern_is_building_it_with_them(
+            n in 1usize..40,
+            base in prop::collection::vec((0u32..40, 0u32..40), 0..120),
+            more in prop::collection::vec((0u32..40, 0u32..40), 0..40),
+        ) {
+            let clip = |v: &[(u32, u32)]| -> Vec<(u32, u32)> {
+                v.iter().map(|&(i, j)| (i % n as u32, j % n as u32)).collect()
+            };
+            let (base, more) = (clip(&base), clip(&more));
+            let a = BlockMatrix::from_pairs(n, &base).with_pairs(&more);
+            let all: Vec<(u32, u32)> = base.iter().chain(&more).copied().collect();
+            let b = BlockMatrix::from_pairs(n, &all);
+            prop_assert_eq!(&a.pattern.row_ptr, &b.pattern.row_ptr);
+            prop_assert_eq!(&a.pattern.col, &b.pattern.col);
+            prop_assert_eq!(&a.pattern.diag, &b.pattern.diag);
+            prop_assert_eq!(a.values.len(), b.values.len());
+        }
+    }
 
     #[test]
     fn product_matches_dense_product() {

@@ -184,7 +184,17 @@ mod tests {
         }
         let (tris, edges) = (m.triangles(), m.edges());
         let pose = pose::at(&m, 0.0, h);
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false, &mut TreeCache::default(), None);
+        let c = contacts(
+            &m,
+            &tris,
+            &edges,
+            &start(&m),
+            &pose,
+            &[],
+            &|_| false,
+            &mut TreeCache::default(),
+            None,
+        );
         assert!(
             !c.obstacle.is_empty(),
             "particles 2 mm above the ground touch it"
@@ -196,12 +206,32 @@ mod tests {
         // pin every particle: no stencil and no obstacle contact is left
         m.pinned = vec![true; m.particle_count()];
         let pose = pose::at(&m, 0.0, h);
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false, &mut TreeCache::default(), None);
+        let c = contacts(
+            &m,
+            &tris,
+            &edges,
+            &start(&m),
+            &pose,
+            &[],
+            &|_| false,
+            &mut TreeCache::default(),
+            None,
+        );
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
         // collisions off: nothing
         m.collision = None;
         m.pinned = vec![false; m.particle_count()];
-        let c = contacts(&m, &tris, &edges, &start(&m), &pose, &[], &|_| false, &mut TreeCache::default(), None);
+        let c = contacts(
+            &m,
+            &tris,
+            &edges,
+            &start(&m),
+            &pose,
+            &[],
+            &|_| false,
+            &mut TreeCache::default(),
+            None,
+        );
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
     }
 
@@ -222,9 +252,17 @@ mod tests {
         let pose = pose::at(&m, 0.0, 0.01);
         let n = m.particle_count();
         let count = |seams: &Seams| {
-            contacts(&m, &tris, &edges, &start, &pose, &[], &|ids| {
-                seams.exempt(ids)
-            }, &mut TreeCache::default(), None)
+            contacts(
+                &m,
+                &tris,
+                &edges,
+                &start,
+                &pose,
+                &[],
+                &|ids| seams.exempt(ids),
+                &mut TreeCache::default(),
+                None,
+            )
             .repulsions
             .map_or(0, |r| r.stencils.len())
         };

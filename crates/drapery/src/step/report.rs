@@ -34,8 +34,17 @@ pub struct StageTimes {
 impl StageTimes {
     /// The stages' names, in the order of [`StageTimes::fields`].
     pub const NAMES: [&'static str; 11] = [
-        "guard", "pose", "detect", "linearize", "constrain", "solve", "update", "friction",
-        "strain", "failsafe", "commit",
+        "guard",
+        "pose",
+        "detect",
+        "linearize",
+        "constrain",
+        "solve",
+        "update",
+        "friction",
+        "strain",
+        "failsafe",
+        "commit",
     ];
 
     /// Every stage's seconds, in the order they run.

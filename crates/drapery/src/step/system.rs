@@ -21,8 +21,6 @@ use crate::math::{Mat3, Vec3};
 
 /// The matrices of the step's linear systems (see the module docs).
 pub(crate) struct System {
-    /// Particle pairs of the model's forces.
-    base_pairs: Vec<(u32, u32)>,
     /// Mass and model forces on their fixed pattern; stale while `with_contacts` is false
     /// (the system matrix then holds those values itself, on the same pattern).
     base: BlockMatrix,
@@ -47,7 +45,6 @@ impl System {
         }
         let matrix = BlockMatrix::from_pairs(n, &pairs);
         System {
-            base_pairs: pairs,
             base: matrix.clone(),
             base_slots: Vec::new(),
             precond: matrix.clone(),
@@ -84,7 +81,7 @@ impl System {
     /// block goes in it).
     pub fn use_contacts(&mut self, contacts: &[&dyn Force]) {
         let n = self.base.n();
-        let mut pairs = self.base_pairs.clone();
+        let mut pairs = Vec::new();
         self.inner.clear();
         for r in contacts {
             let mut own = Vec::new();
@@ -98,7 +95,7 @@ impl System {
             }
         }
         if self.inner.contains(&false) {
-            self.matrix = BlockMatrix::from_pairs(n, &pairs);
+            self.matrix = self.base.with_pairs(&pairs);
             let (base, merged) = (&self.base, &self.matrix);
             self.base_slots.clear();
             for i in 0..n {

@@ -37,8 +37,8 @@
 //! two grazing crossings were missed ([`found_cases`]); the constructed cases below use it.
 
 use super::{edge_edge_toi, vertex_triangle_toi};
-use crate::collision::colliders::{Collider, Motion, Shape, TriangleMesh};
 use crate::collision::bvh::TreeCache;
+use crate::collision::colliders::{Collider, Motion, Shape, TriangleMesh};
 use crate::collision::failsafe::failsafe;
 use crate::collision::predicates::orient3d;
 use crate::collision::settings::Obstacle;
