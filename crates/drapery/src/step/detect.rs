@@ -182,19 +182,14 @@ mod tests {
         for i in 8..16 {
             m.x[i] = m.x[i - 8] + Vec3::new(0.0, 0.002, 0.0);
         }
-        let (tris, edges) = (m.triangles(), m.edges());
+        // the model's contacts, no seam, a fresh tree cache, no pairs passed on
+        let plain = |m: &Model, pose: &pose::Pose| {
+            let (tris, edges) = (m.triangles(), m.edges());
+            let cache = &mut TreeCache::default();
+            contacts(m, &tris, &edges, &start(m), pose, &[], &|_| false, cache, None)
+        };
         let pose = pose::at(&m, 0.0, h);
-        let c = contacts(
-            &m,
-            &tris,
-            &edges,
-            &start(&m),
-            &pose,
-            &[],
-            &|_| false,
-            &mut TreeCache::default(),
-            None,
-        );
+        let c = plain(&m, &pose);
         assert!(
             !c.obstacle.is_empty(),
             "particles 2 mm above the ground touch it"
@@ -206,32 +201,12 @@ mod tests {
         // pin every particle: no stencil and no obstacle contact is left
         m.pinned = vec![true; m.particle_count()];
         let pose = pose::at(&m, 0.0, h);
-        let c = contacts(
-            &m,
-            &tris,
-            &edges,
-            &start(&m),
-            &pose,
-            &[],
-            &|_| false,
-            &mut TreeCache::default(),
-            None,
-        );
+        let c = plain(&m, &pose);
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
         // collisions off: nothing
         m.collision = None;
         m.pinned = vec![false; m.particle_count()];
-        let c = contacts(
-            &m,
-            &tris,
-            &edges,
-            &start(&m),
-            &pose,
-            &[],
-            &|_| false,
-            &mut TreeCache::default(),
-            None,
-        );
+        let c = plain(&m, &pose);
         assert!(c.obstacle.is_empty() && c.repulsions.is_none());
     }
 
