@@ -124,6 +124,7 @@ fn pcg_solve(bencher: Bencher, n: usize) {
         tolerance: 1e-3,
         max_iterations: 10_000,
         preconditioner: Preconditioner::Multigrid,
+        keep_coarse: false,
     };
     let mut w = PcgScratch::default();
     let mut x = vec![Vec3::ZERO; b.len()];

@@ -259,6 +259,29 @@ impl Multigrid {
         self.refresh_damped(a, s, true);
     }
 
+    /// Refreshes the finest level only, for the matrix `a` under a new filter `s`: its filtered
+    /// matrix and its smoother (block diagonal and damping) are recomputed; the prolongators and
+    /// the coarse levels are kept as the last refresh left them. For the obstacle active set's
+    /// later rounds, where only a few contacts' filters change: the cycle's coarse correction
+    /// is then that of the earlier filter, a slightly worse approximation, but the cycle stays
+    /// symmetric positive definite (a convergent smoother with any symmetric positive definite
+    /// coarse operator; docs/MATH.md §14), and the products of PCG use the new filtered matrix
+    /// exactly. A full [`Multigrid::refresh`] when `a`'s pattern is not the hierarchy's.
+    ///
+    /// The result depends on what the kept levels were refreshed from, so a caller that needs
+    /// the same bits after a resume calls it only after a full refresh of the same solve
+    /// sequence (see `step::solve`).
+    pub fn refresh_fine(&mut self, a: &BlockMatrix, s: &[Mat3]) {
+        if self.levels.first().is_none_or(|l| !l.a.same_pattern(a)) {
+            self.refresh(a, s);
+            return;
+        }
+        let t0 = std::time::Instant::now();
+        numeric::refresh_fine(self, a, s);
+        self.times.structure = 0.0;
+        self.times.values = t0.elapsed().as_secs_f64();
+    }
+
     /// [`Multigrid::refresh`], the smoothers damped by a bound of `ρ` when `bound` is set.
     fn refresh_damped(&mut self, a: &BlockMatrix, s: &[Mat3], bound: bool) {
         let t0 = std::time::Instant::now();

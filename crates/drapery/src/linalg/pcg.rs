@@ -37,6 +37,11 @@ pub struct PcgSettings {
     pub max_iterations: usize,
     /// Preconditioner.
     pub preconditioner: Preconditioner,
+    /// With the multigrid: set up only its finest level for this solve's filter
+    /// ([`Multigrid::refresh_fine`]), keeping the coarse levels of the last setup. Only when
+    /// that setup was for the same matrix `p` (another filter of it), as in the obstacle
+    /// active set's later rounds.
+    pub keep_coarse: bool,
 }
 
 /// Outcome of a solve.
@@ -210,7 +215,11 @@ fn prepare(
 ) {
     stats.setups += 1;
     if settings.preconditioner == Preconditioner::Multigrid {
-        w.amg.refresh(p, s);
+        if settings.keep_coarse {
+            w.amg.refresh_fine(p, s);
+        } else {
+            w.amg.refresh(p, s);
+        }
         return;
     }
     w.pinv.resize(p.n(), Mat3::IDENTITY);
@@ -341,6 +350,7 @@ mod tests {
             tolerance: 1e-8,
             max_iterations: 500,
             preconditioner: Preconditioner::Multigrid,
+            keep_coarse: false,
         };
         let b1: Vec<Vec3> = (0..n)
             .map(|i| Vec3::new(1.0, (i % 7) as f64, -2.0))

@@ -97,6 +97,14 @@ pub(crate) fn on_active_set(
         r,
     } = s;
     let (v, rhs, it) = (p.v, p.rhs, p.iteration);
+    // Once a round has set up the whole multigrid for this iteration's matrix, later rounds
+    // (the same matrix, a few contacts' filters changed) set up only its finest level
+    // (docs/MATH.md §14). Never before: the coarse levels would then come from an earlier
+    // matrix, and a resumed run, whose multigrid starts empty, would not repeat them. A round
+    // whose solve took more CG iterations than the one that set up the whole hierarchy (so
+    // many contacts changed that the coarse levels no longer fit) has the next round set it
+    // all up again.
+    let mut set_up: Option<usize> = None;
     for round in 0..CONTACT_ROUNDS {
         timed(&mut report.stages.constrain, || {
             pins::apply(p.pinned, p.pins, v, c);
@@ -121,7 +129,17 @@ pub(crate) fn on_active_set(
         });
         let t = std::time::Instant::now();
         report.linear_solves += 1;
-        linear(system, solvers, settings, rhs, c, dv, it, report)?;
+        let (setups, cg) = (report.preconditioner_setups, report.cg_iterations);
+        let keep = set_up.is_some();
+        linear(system, solvers, settings, rhs, c, dv, it, keep, report)?;
+        let iterations = report.cg_iterations - cg;
+        if report.preconditioner_setups > setups {
+            set_up = match set_up {
+                Some(full) if keep && iterations > full => None,
+                Some(full) if keep => Some(full),
+                _ => Some(iterations),
+            };
+        }
         let mut done = set.is_empty();
         if !done {
             set.measure(system.matrix(), rhs, dv, r);
@@ -135,7 +153,9 @@ pub(crate) fn on_active_set(
     Ok(())
 }
 
-/// One linear solve with the constraints `c` into `dv` (its initial guess on entry).
+/// One linear solve with the constraints `c` into `dv` (its initial guess on entry);
+/// `keep_coarse`: the multigrid was set up for this system matrix already (under another
+/// filter), so only its finest level is set up again ([`PcgSettings::keep_coarse`]).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn linear(
     system: &System,
@@ -145,6 +165,7 @@ pub(crate) fn linear(
     c: &Constraints,
     dv: &mut [Vec3],
     it: u32,
+    keep_coarse: bool,
     report: &mut StepReport,
 ) -> Result<(), String> {
     match settings.linear_solver {
@@ -153,6 +174,7 @@ pub(crate) fn linear(
                 tolerance: settings.tolerance,
                 max_iterations: settings.max_iterations,
                 preconditioner: settings.preconditioner,
+                keep_coarse,
             };
             let stats = pcg::solve_preconditioned_by(
                 system.matrix(),

@@ -35,6 +35,7 @@ fn solve(
         tolerance: 1e-10,
         max_iterations: 100,
         preconditioner: p,
+        keep_coarse: false,
     };
     let stats = pcg::solve(a, b, s, z, &mut x, &settings, &mut PcgScratch::default());
     (stats, x)

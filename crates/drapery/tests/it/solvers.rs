@@ -98,6 +98,7 @@ fn pcg_direct_and_dense_agree_on_random_filtered_spd_systems() {
             tolerance: 1e-13,
             max_iterations: 1000,
             preconditioner: Preconditioner::BlockJacobi,
+            keep_coarse: false,
         };
         let stats = pcg::solve(
             &a,
@@ -151,6 +152,7 @@ fn pcg_and_direct_agree_on_a_real_cloth_matrix_and_it_is_positive_definite() {
         tolerance: 1e-12,
         max_iterations: 5000,
         preconditioner: Preconditioner::BlockJacobi,
+        keep_coarse: false,
     };
     assert!(
         pcg::solve(
@@ -203,6 +205,7 @@ fn block_jacobi_pcg_takes_fewer_iterations_than_plain_cg_on_a_64x64_cloth() {
             tolerance: 1e-8,
             max_iterations: 10000,
             preconditioner: p,
+            keep_coarse: false,
         };
         let st = pcg::solve(
             &a,
@@ -263,6 +266,7 @@ fn a_preconditioner_built_from_the_uncoupled_matrix_still_solves_the_coupled_sys
                 tolerance: 1e-12,
                 max_iterations: 1000,
                 preconditioner,
+                keep_coarse: false,
             };
             let mut x = vec![Vec3::ZERO; n];
             let stats = pcg::solve_preconditioned_by(

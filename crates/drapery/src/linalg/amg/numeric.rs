@@ -32,6 +32,16 @@ pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3], bound: bo
     cycle::factor_coarsest(mg);
 }
 
+/// [`Multigrid::refresh_fine`]: the finest level's filtered matrix and smoother only.
+pub(super) fn refresh_fine(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3]) {
+    let fine = &mut mg.levels[0];
+    filter_matrix(a, s, &mut fine.a, &mut fine.sym);
+    smoother(fine, &mg.params, false);
+    if mg.levels.len() == 1 {
+        cycle::factor_coarsest(mg);
+    }
+}
+
 /// `out = S A S + (I - S)` block by block (`out` has the pattern of `a`), and its upper
 /// triangle into `upper` in the same pass.
 pub(super) fn filter_matrix(
