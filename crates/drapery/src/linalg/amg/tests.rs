@@ -96,20 +96,25 @@ fn the_w_cycle_is_symmetric_and_positive_definite() {
 /// On a 32² cloth with pins and plane contacts, with `coarse_cycles` visits of every coarse
 /// level but the coarsest: `wᵀ B u = uᵀ B w` and `uᵀ B u > 0` for random filtered `u`, `w`.
 fn cycle_is_symmetric_and_positive_definite(coarse_cycles: usize) {
-    let (a, s, mut mg) = hierarchy(32, 3, |p| {
+    let (_, s, mut mg) = hierarchy(32, 3, |p| {
         p.coarse_cycles = coarse_cycles;
         p.repeat_rows = 0;
     });
-    let n = a.n();
     assert!(mg.level_count() >= 3, "{:?}", mg.level_sizes());
-    let mut rng = Rng(5);
-    let filt = |v: Vec<Vec3>| -> Vec<Vec3> { v.iter().zip(&s).map(|(x, m)| *m * *x).collect() };
+    assert_symmetric_positive_definite(&mut mg, &s, &mut Rng(5));
+}
+
+/// `wᵀ B u = uᵀ B w` and `uᵀ B u > 0` for ten pairs of random `u`, `w` filtered by `s`, `B`
+/// the cycle of `mg` under the filter `s`.
+fn assert_symmetric_positive_definite(mg: &mut Multigrid, s: &[Mat3], rng: &mut Rng) {
+    let n = s.len();
+    let filt = |v: Vec<Vec3>| -> Vec<Vec3> { v.iter().zip(s).map(|(x, m)| *m * *x).collect() };
     for _ in 0..10 {
         let u = filt(rng.vecs(n));
         let w = filt(rng.vecs(n));
         let (mut pu, mut pw) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
-        mg.apply(&s, &u, &mut pu);
-        mg.apply(&s, &w, &mut pw);
+        mg.apply(s, &u, &mut pu);
+        mg.apply(s, &w, &mut pw);
         let (wpu, upw) = (dot(&w, &pu), dot(&u, &pw));
         let scale = dot(&u, &pu).abs().max(dot(&w, &pw).abs());
         assert!((wpu - upw).abs() <= 1e-10 * scale, "{wpu} vs {upw}");
@@ -497,18 +502,7 @@ fn a_cycle_with_the_coarse_levels_of_another_filter_stays_positive_definite() {
     assert!(s2.iter().zip(&s).filter(|(p, q)| p != q).count() >= n / 13);
     mg.refresh_fine(&a, &s2);
     let mut rng = Rng(6);
-    let filt = |v: Vec<Vec3>| -> Vec<Vec3> { v.iter().zip(&s2).map(|(x, m)| *m * *x).collect() };
-    for _ in 0..10 {
-        let u = filt(rng.vecs(n));
-        let w = filt(rng.vecs(n));
-        let (mut pu, mut pw) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
-        mg.apply(&s2, &u, &mut pu);
-        mg.apply(&s2, &w, &mut pw);
-        let (wpu, upw) = (dot(&w, &pu), dot(&u, &pw));
-        let scale = dot(&u, &pu).abs().max(dot(&w, &pw).abs());
-        assert!((wpu - upw).abs() <= 1e-10 * scale, "{wpu} vs {upw}");
-        assert!(dot(&u, &pu) > 0.0 && dot(&w, &pw) > 0.0);
-    }
+    assert_symmetric_positive_definite(&mut mg, &s2, &mut rng);
     kept_and_full(&a, &s, &s2, &rng.vecs(n));
 }
 
