@@ -100,11 +100,8 @@ pub(crate) fn on_active_set(
     // Once a round has set up the whole multigrid for this iteration's matrix, later rounds
     // (the same matrix, a few contacts' filters changed) set up only its finest level
     // (docs/MATH.md §14). Never before: the coarse levels would then come from an earlier
-    // matrix, and a resumed run, whose multigrid starts empty, would not repeat them. A round
-    // whose solve took more CG iterations than the one that set up the whole hierarchy (so
-    // many contacts changed that the coarse levels no longer fit) has the next round set it
-    // all up again.
-    let mut set_up: Option<usize> = None;
+    // matrix, and a resumed run, whose multigrid starts empty, would not repeat them.
+    let mut set_up = false;
     for round in 0..CONTACT_ROUNDS {
         timed(&mut report.stages.constrain, || {
             pins::apply(p.pinned, p.pins, v, c);
@@ -129,17 +126,9 @@ pub(crate) fn on_active_set(
         });
         let t = std::time::Instant::now();
         report.linear_solves += 1;
-        let (setups, cg) = (report.preconditioner_setups, report.cg_iterations);
-        let keep = set_up.is_some();
-        linear(system, solvers, settings, rhs, c, dv, it, keep, report)?;
-        let iterations = report.cg_iterations - cg;
-        if report.preconditioner_setups > setups {
-            set_up = match set_up {
-                Some(full) if keep && iterations > full => None,
-                Some(full) if keep => Some(full),
-                _ => Some(iterations),
-            };
-        }
+        let setups = report.preconditioner_setups;
+        linear(system, solvers, settings, rhs, c, dv, it, set_up, report)?;
+        set_up |= report.preconditioner_setups > setups;
         let mut done = set.is_empty();
         if !done {
             set.measure(system.matrix(), rhs, dv, r);
