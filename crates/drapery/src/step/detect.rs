@@ -186,7 +186,17 @@ mod tests {
         let plain = |m: &Model, pose: &pose::Pose| {
             let (tris, edges) = (m.triangles(), m.edges());
             let cache = &mut TreeCache::default();
-            contacts(m, &tris, &edges, &start(m), pose, &[], &|_| false, cache, None)
+            contacts(
+                m,
+                &tris,
+                &edges,
+                &start(m),
+                pose,
+                &[],
+                &|_| false,
+                cache,
+                None,
+            )
         };
         let pose = pose::at(&m, 0.0, h);
         let c = plain(&m, &pose);

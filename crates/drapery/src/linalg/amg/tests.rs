@@ -231,14 +231,19 @@ fn solve_in(
     tol: f64,
 ) -> (Vec<Vec3>, pcg::SolveStats) {
     let mut x = vec![Vec3::ZERO; a.n()];
-    let settings = PcgSettings {
+    let st = pcg::solve(a, b, s, z, &mut x, &settings(p, tol), scratch);
+    (x, st)
+}
+
+/// PCG settings of these tests: `p`, tolerance `tol`, 20 000 iterations at most, a full
+/// multigrid set-up.
+fn settings(p: Preconditioner, tol: f64) -> PcgSettings {
+    PcgSettings {
         tolerance: tol,
         max_iterations: 20000,
         preconditioner: p,
         keep_coarse: false,
-    };
-    let st = pcg::solve(a, b, s, z, &mut x, &settings, scratch);
-    (x, st)
+    }
 }
 
 #[test]
@@ -475,13 +480,11 @@ fn kept_and_full(
     let (_, first) = solve_in(&mut scratch, a, b, s, &z, Preconditioner::Multigrid, 1e-10);
     assert!(first.converged && first.setups == 1);
     let mut kept = vec![Vec3::ZERO; n];
-    let settings = PcgSettings {
-        tolerance: 1e-10,
-        max_iterations: 20000,
-        preconditioner: Preconditioner::Multigrid,
+    let keep = PcgSettings {
         keep_coarse: true,
+        ..settings(Preconditioner::Multigrid, 1e-10)
     };
-    let st = pcg::solve(a, b, s2, &z, &mut kept, &settings, &mut scratch);
+    let st = pcg::solve(a, b, s2, &z, &mut kept, &keep, &mut scratch);
     let (full, reference) = solve(a, b, s2, &z, Preconditioner::Multigrid, 1e-10);
     assert!(st.converged && reference.converged, "{st:?} {reference:?}");
     let scale = full.iter().fold(0.0f64, |m, v| m.max(v.length()));
