@@ -18,7 +18,9 @@
 //! principal stretch of the triangles around the fastest particle, and where the least and
 //! greatest stretched triangles are (centroid and its distance from the origin).
 //!
-//! The shape printed after each frame: the mean hinge angle (degrees), the mean and 99th
+//! The shape printed after each frame (then, after a `|`, the frame's CG iterations, linear
+//! solves, self-contact stencils and CCD hits summed over its steps, its wall time in ms and the
+//! ms of its solve, detect and fail-safe stages): the mean hinge angle (degrees), the mean and 99th
 //! percentile of `|θ|/h` (1/m, a curvature that compares resolutions), the share of hinges bent
 //! over 30°, the least and greatest edge length over rest length, the share of edges shorter than
 //! 0.8 of their rest length, the greatest speed (m/s), and where the shortest edge is (its first
@@ -170,22 +172,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let (mut sim, h, per_frame) = simulation(n, false)?;
             let shape = Shape::new(&sim);
             println!(
-                "frame mean_angle_deg mean_curvature p99_curvature share_over_30deg min_stretch max_stretch share_under_0.8 max_speed shortest_x y z r"
+                "frame mean_angle_deg mean_curvature p99_curvature share_over_30deg min_stretch max_stretch share_under_0.8 max_speed shortest_x y z r | cg solves stencils ccd_hits ms ms_solve ms_detect ms_failsafe"
             );
             for f in 1..=count {
+                let (mut cg, mut solves, mut stencils, mut hits) = (0, 0, 0, 0);
+                let mut times = drapery::StageTimes::default();
+                let t0 = std::time::Instant::now();
                 for _ in 0..per_frame {
-                    sim.step(h)?;
+                    let r = sim.step(h)?;
+                    (cg, solves) = (cg + r.cg_iterations, solves + r.linear_solves);
+                    (stencils, hits) = (stencils + r.self_contacts, hits + r.ccd_hits);
+                    times.solve += r.stages.solve;
+                    times.detect += r.stages.detect;
+                    times.failsafe += r.stages.failsafe;
                 }
+                let ms = 1e3 * t0.elapsed().as_secs_f64();
                 let [a, c, p99, o] = shape.measure(sim.positions());
                 let ([lo, hi, short], at) = shape.stretch(sim.positions());
                 let speed = (sim.velocities().iter()).fold(0.0f64, |m, v| m.max(v.length()));
                 let p = sim.positions()[at];
                 println!(
-                    "{f} {a:.3} {c:.3} {p99:.2} {o:.5} {lo:.4} {hi:.4} {short:.5} {speed:.3} {:.3} {:.3} {:.3} {:.4}",
+                    "{f} {a:.3} {c:.3} {p99:.2} {o:.5} {lo:.4} {hi:.4} {short:.5} {speed:.3} {:.3} {:.3} {:.3} {:.4} | {cg} {solves} {stencils} {hits} {ms:.0} {:.0} {:.0} {:.0}",
                     p.x,
                     p.y,
                     p.z,
-                    p.length()
+                    p.length(),
+                    1e3 * times.solve,
+                    1e3 * times.detect,
+                    1e3 * times.failsafe,
                 );
                 if f < count {
                     std::fs::write(format!("{file}.{f}"), sim.snapshot().to_bytes())?;

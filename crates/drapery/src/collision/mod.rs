@@ -14,6 +14,8 @@
 //! * [`friction`] applies Coulomb friction to cloth–cloth contacts after the solve;
 //! * [`seams`] exempts the contact pairs around stitched vertices, so a seam can close;
 //! * [`ccd`] finds the earliest time of impact over a step, so nothing passes through;
+//! * [`failsafe`] makes each step free of crossings with it, first by translating impact zones
+//!   (`zones`), then by pulling vertices back along their paths;
 //! * [`colliders`] describes analytic and mesh obstacles with rigid motion;
 //! * [`check`] counts intersecting triangle pairs and penetrating vertices (a test oracle),
 //!   with the exact orientation tests of [`predicates`].
@@ -34,3 +36,4 @@ pub mod repulsion;
 pub mod seams;
 pub mod settings;
 pub mod tessellate;
+mod zones;

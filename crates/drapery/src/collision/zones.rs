@@ -1,0 +1,177 @@
+//! Impact zones that translate: the fail-safe's first answer to cloth–cloth collisions
+//! (docs/MATH.md §16, "Impact zones").
+//!
+//! The vertices of colliding cloth pairs are merged into zones (union–find over the pairs, so
+//! zones that share a vertex or collide with each other become one), and every vertex of a zone
+//! moves over the step by the zone's mean displacement instead of its own. A zone then
+//! translates: the vectors between its vertices stay those of the start of the step, so no pair
+//! inside it changes its distance, and none can collide (the start is free of crossings). The
+//! common motion is kept: cloth carried along by a spinning obstacle keeps moving with it, where
+//! pulling the colliding vertices back along their own paths would leave them behind their
+//! neighbours by up to a step's motion (centimetres, stretching their triangles several times
+//! over).
+//!
+//! A zone's displacement is the mean of its vertices' (their momentum, for equal masses); a zone
+//! with pinned vertices moves as they do, and cannot translate if they move differently.
+
+use crate::math::Vec3;
+
+/// The zones of one fail-safe call.
+pub(crate) struct Zones {
+    /// Union–find parent of each cloth vertex (itself when a root).
+    parent: Vec<u32>,
+    /// Whether the vertex is in a zone (was in a colliding pair).
+    member: Vec<bool>,
+}
+
+impl Zones {
+    /// No zone yet, over `n` cloth vertices.
+    pub fn new(n: usize) -> Zones {
+        Zones {
+            parent: (0..n as u32).collect(),
+            member: vec![false; n],
+        }
+    }
+
+    fn root(&mut self, mut i: u32) -> u32 {
+        while self.parent[i as usize] != i {
+            let p = self.parent[i as usize];
+            self.parent[i as usize] = self.parent[p as usize];
+            i = p;
+        }
+        i
+    }
+
+    /// Merges the vertices of each colliding pair into one zone, then sets every zone vertex's
+    /// end position `ye` to its start `x0` plus its zone's displacement (`start - x0` averaged
+    /// over the zone, or the pinned vertices' common displacement), marking in `moved` those
+    /// whose end changed. Returns false, changing nothing in `ye`, when some zone has pinned
+    /// vertices that move differently or no end position changed (the zones cannot make
+    /// progress). `pairs` must name cloth vertices only.
+    pub fn translate<'a>(
+        &mut self,
+        pairs: impl Iterator<Item = &'a [u32; 4]>,
+        x0: &[Vec3],
+        start: &[Vec3],
+        pinned: &[bool],
+        ye: &mut [Vec3],
+        moved: &mut [bool],
+    ) -> bool {
+        for ids in pairs {
+            let mut r = self.root(ids[0]);
+            for &i in ids {
+                self.member[i as usize] = true;
+                let s = self.root(i);
+                if s != r {
+                    // the smaller index is the root: the zones do not depend on the order
+                    let (lo, hi) = (r.min(s), r.max(s));
+                    self.parent[hi as usize] = lo;
+                    r = lo;
+                }
+            }
+        }
+        let n = self.parent.len();
+        // per root: displacement sum, count, and the pinned displacement (NaN if inconsistent)
+        let mut sum = vec![Vec3::ZERO; n];
+        let mut count = vec![0u32; n];
+        let mut pin: Vec<Option<Vec3>> = vec![None; n];
+        for i in 0..n {
+            if !self.member[i] {
+                continue;
+            }
+            let r = self.root(i as u32) as usize;
+            let d = start[i] - x0[i];
+            sum[r] += d;
+            count[r] += 1;
+            if pinned[i] {
+                match pin[r] {
+                    None => pin[r] = Some(d),
+                    Some(p) if p == d => {}
+                    Some(_) => return false,
+                }
+            }
+        }
+        let mut ends = Vec::new();
+        for i in 0..n {
+            if !self.member[i] || pinned[i] {
+                continue;
+            }
+            let r = self.root(i as u32) as usize;
+            let d = pin[r].unwrap_or(sum[r] / count[r] as f64);
+            let end = x0[i] + d;
+            if end != ye[i] {
+                ends.push((i, end));
+            }
+        }
+        if ends.is_empty() {
+            return false;
+        }
+        for (i, end) in ends {
+            ye[i] = end;
+            moved[i] = true;
+        }
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_zone_moves_by_its_mean_displacement_and_keeps_its_shape() {
+        // two pairs sharing vertex 2: one zone of 0..6; vertex 7 stays out
+        let x0: Vec<Vec3> = (0..8)
+            .map(|i| Vec3::new(i as f64, 0.1 * i as f64, 0.0))
+            .collect();
+        let start: Vec<Vec3> = (0..8)
+            .map(|i| x0[i] + Vec3::new(0.01 * i as f64, -0.02, 0.003 * (i * i) as f64))
+            .collect();
+        let mut ye = start.clone();
+        let mut moved = vec![false; 8];
+        let mut z = Zones::new(8);
+        let pairs = [[0, 1, 2, 3], [2, 4, 5, 6]];
+        assert!(z.translate(pairs.iter(), &x0, &start, &[false; 8], &mut ye, &mut moved));
+        let mean = (0..7).map(|i| start[i] - x0[i]).sum::<Vec3>() / 7.0;
+        for i in 0..7 {
+            assert!((ye[i] - x0[i] - mean).length() < 1e-15);
+            assert!(moved[i]);
+            // the zone's shape is the start's
+            let (a, b) = (ye[i] - ye[0], x0[i] - x0[0]);
+            assert!((a - b).length() < 1e-14, "{i}");
+        }
+        assert_eq!(ye[7], start[7]);
+        assert!(!moved[7]);
+        // the same pairs again: nothing changes, no progress
+        moved.iter_mut().for_each(|m| *m = false);
+        assert!(!z.translate(pairs.iter(), &x0, &start, &[false; 8], &mut ye, &mut moved));
+    }
+
+    #[test]
+    fn a_zone_with_a_pinned_vertex_moves_with_it_or_not_at_all() {
+        let x0: Vec<Vec3> = (0..4).map(|i| Vec3::new(i as f64, 0.0, 0.0)).collect();
+        let mut start = x0.clone();
+        start[1] += Vec3::new(0.0, 0.5, 0.0);
+        start[2] += Vec3::new(0.0, -0.1, 0.0);
+        // one pair's zone from a fresh start; the end positions it leaves, or None
+        let zone = |start: &[Vec3], pinned: &[bool]| {
+            let mut ye = start.to_vec();
+            let ok = Zones::new(4).translate(
+                [[0, 1, 2, 3]].iter(),
+                &x0,
+                start,
+                pinned,
+                &mut ye,
+                &mut [false; 4],
+            );
+            ok.then_some(ye)
+        };
+        let mut pinned = [true, false, false, false];
+        // the pinned vertex does not move, so neither does its zone
+        assert_eq!(zone(&start, &pinned), Some(x0.clone()));
+        // two pinned vertices moving differently: no translation
+        pinned[3] = true;
+        start[3] += Vec3::new(0.1, 0.0, 0.0);
+        assert_eq!(zone(&start, &pinned), None);
+    }
+}
