@@ -364,6 +364,17 @@ pub fn failsafe(
     // round has a hit with an obstacle or the zones make no progress; from then on the hit
     // vertices are pulled back along their paths (after zones, straight to their start).
     let mut zones = Some(Zones::new(n));
+    // a zone's new path must keep clear of the analytic obstacles as stage 1 made the solve's
+    // paths: swept, or for a particle that started that close, ending at least `stop` out
+    let clear = |i: usize, end: Vec3| {
+        analytic.iter().all(|o| {
+            if o.collider.closest(x0[i], t0).signed_distance < stop {
+                o.collider.closest(end, t0 + h).signed_distance >= stop
+            } else {
+                sweep(o, x0[i], end, t0, h, stop).is_none()
+            }
+        })
+    };
     let mut partial = true;
     let max_rounds = PARTIAL_ROUNDS + 2 * n + 16;
     for round in 0..max_rounds {
@@ -380,7 +391,7 @@ pub fn failsafe(
                 .values()
                 .all(|(ids, _)| ids.iter().all(|&i| is_cloth(i)));
             let pairs = hits.values().map(|(ids, _)| ids);
-            if cloth && z.translate(pairs, x0, &start, pinned, &mut ye[..n], &mut moved) {
+            if cloth && z.translate(pairs, x0, &start, pinned, &clear, &mut ye[..n], &mut moved) {
                 report.zone_rounds += 1;
                 let cand = boxes.touching(&moved, &ys0, &ye);
                 hits.retain(|_, (ids, _)| !ids.iter().any(|&i| moved[i as usize]));
@@ -486,7 +497,15 @@ mod tests {
             if let Some(z) = &mut zones {
                 let (pinned, mut moved) = (vec![false; n], vec![false; n]);
                 let pairs = hits.iter().map(|(ids, _)| ids);
-                if z.translate(pairs, x0, &start, &pinned, &mut ye, &mut moved) {
+                if z.translate(
+                    pairs,
+                    x0,
+                    &start,
+                    &pinned,
+                    &|_, _| true,
+                    &mut ye,
+                    &mut moved,
+                ) {
                     zone_rounds += 1;
                     continue;
                 }
@@ -557,6 +576,28 @@ mod tests {
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(24))]
+
+        /// Cloth carried along fast (1.6 cm per step, the spinning sphere's surface speed at
+        /// 290²) whose two sheets pass through each other in the step: the colliding vertices
+        /// keep the common motion (impact zones translate) instead of staying behind their
+        /// neighbours, and the end is free of crossings. A vertex's own displacement along the
+        /// carrying direction is 1.6 ± 0.5 cm; pulled back along its own path to half the time
+        /// of impact (under 1) it would be under 1.05 cm.
+        #[test]
+        fn colliding_cloth_carried_along_keeps_its_common_motion(
+            seed in any::<u64>(), n in 4usize..9, depth in 0.02..0.05f64,
+        ) {
+            let (x0, mut x1, tris, edges) = crossing_sheets(seed, n, depth);
+            let carry = Vec3::new(0.016, 0.0, 0.0);
+            x1.iter_mut().for_each(|p| *p += carry);
+            let pinned = vec![false; x0.len()];
+            let r = failsafe(&x0, &mut x1, &pinned, &tris, &edges, &[], 0.0, 0.01, 0.005, true, &|_| false, &mut TreeCache::default()).unwrap();
+            prop_assert!(r.ccd_hits > 0 && r.zone_rounds > 0, "{:?}", r);
+            prop_assert_eq!(count_self_intersections(&x1, &tris), 0);
+            for (a, b) in x0.iter().zip(&x1) {
+                prop_assert!((*b - *a).x > 0.0109, "left behind: {}", (*b - *a).x);
+            }
+        }
 
         /// The pairs passed on for the next step are the proximity candidates of the end
         /// positions (the broad phase run on them with the thickness as margin), in its order.

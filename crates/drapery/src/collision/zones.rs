@@ -46,14 +46,17 @@ impl Zones {
     /// end position `ye` to its start `x0` plus its zone's displacement (`start - x0` averaged
     /// over the zone, or the pinned vertices' common displacement), marking in `moved` those
     /// whose end changed. Returns false, changing nothing in `ye`, when some zone has pinned
-    /// vertices that move differently or no end position changed (the zones cannot make
-    /// progress). `pairs` must name cloth vertices only.
+    /// vertices that move differently, when `clear(i, end)` is false for a vertex `i` whose end
+    /// would change (its new path meets an obstacle), or when no end position changed (the zones
+    /// cannot make progress). `pairs` must name cloth vertices only.
+    #[allow(clippy::too_many_arguments)]
     pub fn translate<'a>(
         &mut self,
         pairs: impl Iterator<Item = &'a [u32; 4]>,
         x0: &[Vec3],
         start: &[Vec3],
         pinned: &[bool],
+        clear: &(dyn Fn(usize, Vec3) -> bool + Sync),
         ye: &mut [Vec3],
         moved: &mut [bool],
     ) -> bool {
@@ -103,7 +106,7 @@ impl Zones {
                 ends.push((i, end));
             }
         }
-        if ends.is_empty() {
+        if ends.is_empty() || !ends.iter().all(|&(i, end)| clear(i, end)) {
             return false;
         }
         for (i, end) in ends {
@@ -127,11 +130,14 @@ mod tests {
         let start: Vec<Vec3> = (0..8)
             .map(|i| x0[i] + Vec3::new(0.01 * i as f64, -0.02, 0.003 * (i * i) as f64))
             .collect();
-        let mut ye = start.clone();
-        let mut moved = vec![false; 8];
-        let mut z = Zones::new(8);
         let pairs = [[0, 1, 2, 3], [2, 4, 5, 6]];
-        assert!(z.translate(pairs.iter(), &x0, &start, &[false; 8], &mut ye, &mut moved));
+        type Clear<'a> = &'a (dyn Fn(usize, Vec3) -> bool + Sync);
+        let go = |z: &mut Zones, clear: Clear, ye: &mut [Vec3], moved: &mut [bool]| {
+            z.translate(pairs.iter(), &x0, &start, &[false; 8], clear, ye, moved)
+        };
+        let (mut ye, mut moved) = (start.clone(), vec![false; 8]);
+        let mut z = Zones::new(8);
+        assert!(go(&mut z, &|_, _| true, &mut ye, &mut moved));
         let mean = (0..7).map(|i| start[i] - x0[i]).sum::<Vec3>() / 7.0;
         for i in 0..7 {
             assert!((ye[i] - x0[i] - mean).length() < 1e-15);
@@ -144,7 +150,11 @@ mod tests {
         assert!(!moved[7]);
         // the same pairs again: nothing changes, no progress
         moved.iter_mut().for_each(|m| *m = false);
-        assert!(!z.translate(pairs.iter(), &x0, &start, &[false; 8], &mut ye, &mut moved));
+        assert!(!go(&mut z, &|_, _| true, &mut ye, &mut moved));
+        // a zone whose path meets an obstacle does not move
+        let mut ye = start.clone();
+        assert!(!go(&mut Zones::new(8), &|i, _| i != 3, &mut ye, &mut moved));
+        assert_eq!(ye, start);
     }
 
     #[test]
@@ -161,6 +171,7 @@ mod tests {
                 &x0,
                 start,
                 pinned,
+                &|_, _| true,
                 &mut ye,
                 &mut [false; 4],
             );
