@@ -6,10 +6,11 @@
 //!   within a tenth of the thickness stops there and moves rigidly with the obstacle for the rest
 //!   of the step;
 //! * vertex–triangle and edge–edge continuous collision detection runs over the cloth (self and
-//!   cloth–cloth) and against mesh obstacles; the cloth vertices of a colliding pair are pulled
-//!   back along their own paths to half the time of impact, repeatedly, and after a few rounds all
-//!   the way to their start (always collision-free), or carried rigidly with the obstacle that
-//!   hits them. This is a CCD-limited step, applied only to the vertices that need it. A pair
+//!   cloth–cloth) and against mesh obstacles; the vertices of colliding cloth pairs first move as
+//!   impact zones that translate by their mean displacement (`zones`); when that cannot
+//!   be done, the cloth vertices of a colliding pair are pulled back along their own paths to
+//!   half the time of impact, repeatedly, and after a few rounds all the way to their start
+//!   (always collision-free), or carried rigidly with the obstacle that hits them. This is a CCD-limited step, applied only to the vertices that need it. A pair
 //!   that starts closer than the CCD tolerance is held if it would touch, and no pair may end
 //!   closer than a tenth of the tolerance unless it started closer (then it may not come closer
 //!   at all): pulled back step after step, a pair could otherwise creep toward touching until
@@ -179,6 +180,28 @@ fn sweep(o: &Obstacle, x0: Vec3, x1: Vec3, t0: f64, h: f64, stop: f64) -> Option
     Some(s)
 }
 
+/// What an analytic obstacle does to a particle's path `x0 → end` over `[t0, t0 + h]`.
+enum Stop {
+    /// It started within `stop` of the obstacle (or inside) and ends so: put it here, `stop`
+    /// out at `t0 + h`.
+    Project(Vec3),
+    /// Its path comes within `stop` at this fraction of it ([`sweep`]).
+    Hit(f64),
+}
+
+/// The analytic obstacle's rule for a path (the fail-safe's stage 1): a particle that starts
+/// within `stop` of it only has to end `stop` out; any other is swept. `None` when the path
+/// keeps clear.
+fn obstacle_stop(o: &Obstacle, x0: Vec3, end: Vec3, t0: f64, h: f64, stop: f64) -> Option<Stop> {
+    if o.collider.closest(x0, t0).signed_distance < stop {
+        // started (too) close: only make sure it ends outside
+        let c = o.collider.closest(end, t0 + h);
+        (c.signed_distance < stop).then(|| Stop::Project(c.point + c.normal * stop))
+    } else {
+        sweep(o, x0, end, t0, h, stop).map(Stop::Hit)
+    }
+}
+
 /// Makes the end-of-step positions `x1` free of crossings (see the module docs), letting
 /// through the contact pairs for which `exempt` is true (those within a stitched neighbourhood,
 /// so that seams can close, [`super::seams::Seams::exempt`]; starting tangles). Pair particles
@@ -218,18 +241,18 @@ pub fn failsafe(
                 let mut changed = false;
                 let mut projected = false;
                 for o in &analytic {
-                    if o.collider.closest(x0[i], t0).signed_distance < stop {
-                        // started (too) close: only make sure it ends outside
-                        let c = o.collider.closest(end, t0 + h);
-                        if c.signed_distance < stop {
-                            end = c.point + c.normal * stop;
+                    match obstacle_stop(o, x0[i], end, t0, h, stop) {
+                        Some(Stop::Project(p)) => {
+                            end = p;
                             changed = true;
                             projected = true;
                         }
-                    } else if let Some(s) = sweep(o, x0[i], end, t0, h, stop) {
-                        let hit = x0[i] + s * (end - x0[i]);
-                        end = o.collider.carry(hit, t0 + s * h, t0 + h);
-                        changed = true;
+                        Some(Stop::Hit(s)) => {
+                            let hit = x0[i] + s * (end - x0[i]);
+                            end = o.collider.carry(hit, t0 + s * h, t0 + h);
+                            changed = true;
+                        }
+                        None => {}
                     }
                 }
                 changed.then_some((end, projected))
@@ -356,26 +379,19 @@ pub fn failsafe(
     }
     drop(first);
     let mut moved = vec![false; ye.len()];
-    // Every round that finds a hit changes some vertex (a pull-back, or a carry), or makes no
-    // progress and fails; after the partial rounds a vertex only goes back once and a carry only
-    // changes the obstacle, so the cap is never the limit in practice (a large pile can need
-    // many rounds: a stopped vertex can make its neighbours' triangles hit something new).
     // Cloth–cloth hits move their vertices as translating impact zones (`zones`) until a
-    // round has a hit with an obstacle or the zones make no progress; from then on the hit
-    // vertices are pulled back along their paths (after zones, straight to their start).
+    // round has a hit with an obstacle, a zone whose new path stage 1's rule for the analytic
+    // obstacles would stop, or zones that make no progress; from then on the hit vertices are
+    // pulled back along their paths (after zones, straight to their start: no partial rounds).
     let mut zones = Some(Zones::new(n));
-    // a zone's new path must keep clear of the analytic obstacles as stage 1 made the solve's
-    // paths: swept, or for a particle that started that close, ending at least `stop` out
     let clear = |i: usize, end: Vec3| {
-        analytic.iter().all(|o| {
-            if o.collider.closest(x0[i], t0).signed_distance < stop {
-                o.collider.closest(end, t0 + h).signed_distance >= stop
-            } else {
-                sweep(o, x0[i], end, t0, h, stop).is_none()
-            }
-        })
+        (analytic.iter()).all(|o| obstacle_stop(o, x0[i], end, t0, h, stop).is_none())
     };
-    let mut partial = true;
+    // Every round that finds a hit changes some vertex (a zone, a pull-back, or a carry), or
+    // makes no progress and fails; after the partial rounds a vertex only goes back once and a
+    // carry only changes the obstacle, so the cap is never the limit in practice (a large pile
+    // can need many rounds: a stopped vertex can make its neighbours' triangles hit something
+    // new).
     let max_rounds = PARTIAL_ROUNDS + 2 * n + 16;
     for round in 0..max_rounds {
         report.rounds = round + 1;
@@ -398,7 +414,6 @@ pub fn failsafe(
                 hits.extend(all_hits(&cand, &ye));
                 continue;
             }
-            partial = report.zone_rounds == 0;
             zones = None;
         }
         let mut carry_changed = false;
@@ -421,7 +436,7 @@ pub fn failsafe(
                     if let Some(k) = obstacle {
                         carried[i] = Some(k);
                     }
-                } else if partial && round < PARTIAL_ROUNDS {
+                } else if report.zone_rounds == 0 && round < PARTIAL_ROUNDS {
                     frac[i] = frac[i].min(frac[i] * 0.5 * s);
                 } else {
                     frac[i] = 0.0;
@@ -478,7 +493,7 @@ mod tests {
         let mut ye = start.clone();
         let mut frac = vec![1.0f64; n];
         let tol = 1e-3 * thickness;
-        let (mut zones, mut zone_rounds, mut partial) = (Some(Zones::new(n)), 0, true);
+        let (mut zones, mut zone_rounds) = (Some(Zones::new(n)), 0);
         for round in 0..PARTIAL_ROUNDS + 2 * n + 16 {
             let cand = candidates(x0, &ye, tris, edges, tol);
             let hits: Vec<([u32; 4], f64)> = (cand.vt.iter())
@@ -509,14 +524,14 @@ mod tests {
                     zone_rounds += 1;
                     continue;
                 }
-                (zones, partial) = (None, zone_rounds == 0);
+                zones = None;
             }
             let mut progress = false;
             for (ids, s) in &hits {
                 for &i in ids {
                     let i = i as usize;
                     let before = frac[i];
-                    if partial && round < PARTIAL_ROUNDS {
+                    if zone_rounds == 0 && round < PARTIAL_ROUNDS {
                         frac[i] = frac[i].min(frac[i] * 0.5 * s);
                     } else {
                         frac[i] = 0.0;

@@ -74,7 +74,7 @@ impl Zones {
             }
         }
         let n = self.parent.len();
-        // per root: displacement sum, count, and the pinned displacement (NaN if inconsistent)
+        // per root: displacement sum, count, and the pinned vertices' displacement
         let mut sum = vec![Vec3::ZERO; n];
         let mut count = vec![0u32; n];
         let mut pin: Vec<Option<Vec3>> = vec![None; n];
