@@ -10,7 +10,7 @@
 
 use super::Constraints;
 use crate::collision::settings::Obstacle;
-use crate::linalg::BlockMatrix;
+use crate::linalg::split::Split;
 use crate::math::Vec3;
 use rayon::prelude::*;
 
@@ -142,25 +142,22 @@ impl ActiveSet {
 
     /// Before the first solve of a step: predicts from the initial guess `dv` which contacts
     /// would pull (`n·(A w - rhs) < 0` for `w = z + S dv`), and releases those whose guessed
-    /// velocity leaves the surface anyway. `w` and `r` are scratch vectors.
-    #[allow(clippy::too_many_arguments)]
+    /// velocity leaves the surface anyway. `w` is scratch.
     pub fn predict(
         &mut self,
-        a: &BlockMatrix,
+        a: Split,
         rhs: &[Vec3],
         v: &[Vec3],
         dv: &[Vec3],
         c: &mut Constraints,
         w: &mut [Vec3],
-        r: &mut [Vec3],
     ) {
         for i in 0..w.len() {
             w[i] = c.z[i] + c.filter[i] * dv[i];
         }
-        a.mul_vec(w, r);
         for (ct, act) in self.candidates.iter().zip(self.active.iter_mut()) {
             let i = ct.particle as usize;
-            let pulls = ct.normal.dot(r[i] - rhs[i]) < 0.0;
+            let pulls = ct.normal.dot(a.row_product(i, w) - rhs[i]) < 0.0;
             let leaves = ct.normal.dot(v[i] + dv[i]) >= ct.normal_velocity;
             if pulls && leaves {
                 *act = false;
@@ -170,12 +167,11 @@ impl ActiveSet {
     }
 
     /// After a solve: each candidate's normal impulse `n·(A dv - rhs)` (scaled by `1/h`, the
-    /// force the constraint exerted). `r` is scratch.
-    pub fn measure(&mut self, a: &BlockMatrix, rhs: &[Vec3], dv: &[Vec3], r: &mut [Vec3]) {
-        a.mul_vec(dv, r);
+    /// force the constraint exerted), from the candidates' rows of `A dv` only.
+    pub fn measure(&mut self, a: Split, rhs: &[Vec3], dv: &[Vec3]) {
         for (ct, l) in self.candidates.iter().zip(self.impulse.iter_mut()) {
             let i = ct.particle as usize;
-            *l = ct.normal.dot(r[i] - rhs[i]);
+            *l = ct.normal.dot(a.row_product(i, dv) - rhs[i]);
         }
     }
 
@@ -283,13 +279,11 @@ mod tests {
         };
         let mut set = ActiveSet::new(vec![ct(0), ct(1)]);
         // identity matrix: the impulse of a contact is n·(dv - rhs)
-        let a = BlockMatrix::from_pairs(2, &[]);
-        let mut a = a;
+        let mut a = crate::linalg::BlockMatrix::from_pairs(2, &[]);
         a.set_block_diagonal(|_| crate::math::Mat3::IDENTITY);
         let rhs = [Vec3::new(0.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
         let dv = [Vec3::ZERO, Vec3::ZERO];
-        let mut r = [Vec3::ZERO; 2];
-        set.measure(&a, &rhs, &dv, &mut r);
+        set.measure(Split::whole(&a), &rhs, &dv);
         // particle 0 is pushed up by the constraint (rhs pulls it down), particle 1 pulled down
         assert!(set.update(&[Vec3::ZERO; 2], &dv, 1e-3));
         let (held, impulse) = set.held();
@@ -300,7 +294,7 @@ mod tests {
         assert!(set.update(&sinking, &dv, 1e-3));
         assert_eq!(set.held().0.len(), 2);
         // nothing to flip: unchanged
-        set.measure(&a, &[Vec3::new(0.0, -1.0, 0.0); 2], &dv, &mut r);
+        set.measure(Split::whole(&a), &[Vec3::new(0.0, -1.0, 0.0); 2], &dv);
         assert!(!set.update(&[Vec3::ZERO; 2], &dv, 1e-3));
     }
 }

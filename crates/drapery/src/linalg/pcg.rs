@@ -10,6 +10,7 @@
 
 use super::amg::Multigrid;
 use super::bsr::BlockMatrix;
+use super::split::Split;
 use super::vector::{CHUNK, chunked_sum, chunked_sum2, dot};
 use crate::math::{Mat3, Vec3};
 use rayon::prelude::*;
@@ -116,18 +117,15 @@ pub fn solve(
     settings: &PcgSettings,
     w: &mut PcgScratch,
 ) -> SolveStats {
-    solve_preconditioned_by(a, a, b, s, z, x, settings, w)
+    solve_split(Split::whole(a), b, s, z, x, settings, w)
 }
 
-/// [`solve`] with the preconditioner built from `p` instead of `a` (same size; symmetric
-/// positive definite, close to `a`): for instance `a` without some of its coupling blocks, so
-/// that the multigrid keeps its structure while `a`'s pattern changes. Passing the same
-/// matrix as `a` and `p` (the same reference) lets the product use the multigrid's copy of the
-/// filtered matrix, which reads half the bytes.
-#[allow(clippy::too_many_arguments)]
-pub fn solve_preconditioned_by(
-    a: &BlockMatrix,
-    p: &BlockMatrix,
+/// [`solve`] for `A = P + C` ([`Split`]), the preconditioner built from `P` alone (symmetric
+/// positive definite, close to `A`: for instance `A` without the coupling blocks of a step's
+/// contacts, so that the multigrid keeps its structure while the contacts change). With the
+/// multigrid, the products read its half-size copy of the filtered `P` and add `C`'s rows.
+pub fn solve_split(
+    a: Split,
     b: &[Vec3],
     s: &[Mat3],
     z: &[Vec3],
@@ -135,14 +133,12 @@ pub fn solve_preconditioned_by(
     settings: &PcgSettings,
     w: &mut PcgScratch,
 ) -> SolveStats {
+    let p = a.p;
     let n = a.n();
-    debug_assert_eq!(p.n(), n);
     for v in [&mut w.r, &mut w.c, &mut w.q, &mut w.s] {
         v.resize(n, Vec3::ZERO);
     }
     let multigrid = settings.preconditioner == Preconditioner::Multigrid;
-    // the multigrid holds the filtered `p` in half the bytes: the product's matrix when `p` is `a`
-    let filtered_product = multigrid && std::ptr::eq(a, p);
     // The preconditioner is set up only once an iteration is needed: an initial guess that
     // already meets the tolerance (the obstacle active set's last round, say, when it only
     // released contacts with tiny impulses) costs no multigrid refresh. Unless the refresh
@@ -187,7 +183,7 @@ pub fn solve_preconditioned_by(
         prepare(p, s, settings, w, &mut stats);
     }
     let mut run = |w: &mut PcgScratch, stats: &mut SolveStats, rnorm: &mut f64| {
-        iterate(a, s, x, settings, w, target, filtered_product, stats, rnorm)
+        iterate(a, s, x, settings, w, target, stats, rnorm)
     };
     run(w, &mut stats, &mut rnorm);
     if stats.bad_preconditioner && multigrid {
@@ -248,13 +244,12 @@ fn prepare(
 /// iteration cap, or a breakdown (recorded in `stats`); `rnorm` is `‖r‖`, kept up to date.
 #[allow(clippy::too_many_arguments)]
 fn iterate(
-    a: &BlockMatrix,
+    a: Split,
     s: &[Mat3],
     x: &mut [Vec3],
     settings: &PcgSettings,
     w: &mut PcgScratch,
     target: f64,
-    filtered_product: bool,
     stats: &mut SolveStats,
     rnorm: &mut f64,
 ) {
@@ -265,21 +260,30 @@ fn iterate(
             break;
         }
         // q = S A c and cᵀq in one pass
-        let cq = if filtered_product {
-            // c is filtered, so S A c = Â c
+        let mut cq = if multigrid {
+            // c is filtered, so S P c = P̂ c: the multigrid's copy, half the bytes
             w.amg.filtered_product(&w.c, &mut w.q)
         } else {
-            let c = &w.c;
+            let (c, p) = (&w.c, a.p);
             chunked_sum(&mut w.q, &mut w.partial, |first, q| {
                 let mut acc = 0.0;
                 for (k, qi) in q.iter_mut().enumerate() {
                     let i = first + k;
-                    *qi = s[i] * a.row_product(i, c);
+                    *qi = s[i] * p.row_product(i, c);
                     acc += c[i].dot(*qi);
                 }
                 acc
             })
         };
+        if let Some(coupling) = a.coupling {
+            // + S C c on the few coupled rows, in row order (the same bits on any thread count)
+            for &i in coupling.rows() {
+                let i = i as usize;
+                let d = s[i] * coupling.row_product(i, &w.c);
+                w.q[i] += d;
+                cq += w.c[i].dot(d);
+            }
+        }
         if !(cq > 0.0) {
             stats.indefinite = true;
             break;

@@ -491,9 +491,10 @@ impl Simulation {
         &self.forces
     }
 
-    /// The system matrix of the last Newton iteration.
+    /// The system matrix of the last Newton iteration (on one pattern, merged on request when
+    /// the step had contacts outside the model's pattern).
     pub fn matrix(&self) -> &BlockMatrix {
-        self.system.matrix()
+        self.system.merged()
     }
 
     /// Total force at the current state.

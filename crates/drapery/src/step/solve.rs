@@ -61,10 +61,8 @@ pub(crate) struct Problem<'a> {
 pub(crate) struct Scratch {
     /// The velocity filter and prescribed changes.
     pub constraints: Constraints,
-    /// Scratch for the active set's products.
+    /// Scratch for the active set's prediction.
     pub w: Vec<Vec3>,
-    /// Scratch for the active set's products.
-    pub r: Vec<Vec3>,
 }
 
 impl Scratch {
@@ -72,7 +70,7 @@ impl Scratch {
     pub fn resize(&mut self, n: usize) {
         let c = &mut self.constraints;
         c.filter.resize(n, crate::math::Mat3::IDENTITY);
-        for b in [&mut c.z, &mut self.w, &mut self.r] {
+        for b in [&mut c.z, &mut self.w] {
             b.resize(n, Vec3::ZERO);
         }
     }
@@ -91,11 +89,7 @@ pub(crate) fn on_active_set(
     s: &mut Scratch,
     report: &mut StepReport,
 ) -> Result<(), String> {
-    let Scratch {
-        constraints: c,
-        w,
-        r,
-    } = s;
+    let Scratch { constraints: c, w } = s;
     let (v, rhs, it) = (p.v, p.rhs, p.iteration);
     // Once a round has set up the whole multigrid for this iteration's matrix, later rounds
     // (the same matrix, a few contacts' filters changed) set up only its finest level
@@ -121,7 +115,7 @@ pub(crate) fn on_active_set(
             }
             set.hold(v, c);
             if round == 0 && it == 0 && !set.is_empty() {
-                set.predict(system.matrix(), rhs, v, dv, c, w, r);
+                set.predict(system.matrix(), rhs, v, dv, c, w);
             }
         });
         let t = std::time::Instant::now();
@@ -131,7 +125,7 @@ pub(crate) fn on_active_set(
         set_up |= report.preconditioner_setups > setups;
         let mut done = set.is_empty();
         if !done {
-            set.measure(system.matrix(), rhs, dv, r);
+            set.measure(system.matrix(), rhs, dv);
             done = round + 1 == CONTACT_ROUNDS || !set.update(v, dv, p.sink_tolerance);
         }
         report.stages.solve += t.elapsed().as_secs_f64();
@@ -165,9 +159,8 @@ pub(crate) fn linear(
                 preconditioner: settings.preconditioner,
                 keep_coarse,
             };
-            let stats = pcg::solve_preconditioned_by(
+            let stats = pcg::solve_split(
                 system.matrix(),
-                system.preconditioner(),
                 rhs,
                 &c.filter,
                 &c.z,
@@ -199,7 +192,7 @@ pub(crate) fn linear(
             let symmetric = !settings.damping_x_jacobian;
             solvers
                 .direct
-                .solve(system.matrix(), rhs, &c.filter, &c.z, dv, symmetric)?;
+                .solve(system.merged(), rhs, &c.filter, &c.z, dv, symmetric)?;
         }
     }
     Ok(())

@@ -1,39 +1,37 @@
 //! Which matrices a step uses and why.
 //!
-//! * The **system matrix** `A = M - h D - h² K` of the Newton iteration, on the pattern of the
-//!   model's forces, enlarged by this step's contact pairs (cloth–cloth, cloth–collider) when there
-//!   are any.
-//! * Without contacts the mass and the model's forces are assembled straight into it.
-//! * With contacts they are assembled into the **base matrix** (the fixed pattern of the model's
-//!   forces), copied into the enlarged system matrix, and the contact blocks added there; the
-//!   **preconditioner matrix** is the base matrix plus the contacts' diagonal blocks (their
-//!   coupling left out), so the multigrid keeps one structure for the whole run.
-//! * A contact force whose pairs add no block to the base pattern (the cloth–collider pairs,
-//!   whose cloth particles share a triangle or an edge; cloth–cloth stencils too when every
-//!   pair of their particles is already coupled by the model's forces) is assembled with the
-//!   model's forces, into the base matrix, so the preconditioner gets its blocks, coupling and
-//!   all; when all contacts are such, the system matrix keeps the base pattern and is its own
-//!   preconditioner.
+//! * The **system matrix** `A = M - h D - h² K` of the Newton iteration is kept in two parts,
+//!   `A = P + C` ([`Split`]).
+//! * `P` is on the fixed pattern of the model's forces (the **base matrix**): the mass, the
+//!   model's forces, the contacts whose pairs add no block to that pattern (the cloth–collider
+//!   pairs, whose cloth particles share a triangle or an edge; cloth–cloth stencils too when
+//!   every pair of their particles is already coupled by the model's forces), and the
+//!   diagonal blocks of the other contacts. The preconditioner is built from `P`, so the
+//!   multigrid keeps one structure for the whole run, and PCG's products read its half-size
+//!   copy of `P`.
+//! * `C` holds the off-diagonal blocks of the other contacts (cloth–cloth stencils between
+//!   distant parts of a cloth), on a small pattern of their own ([`Coupling`]), rebuilt when
+//!   the contacts change; without such contacts there is no `C` and `A = P`.
+//! * The preconditioner therefore lacks exactly `C`, the coupling of the contacts outside the
+//!   base pattern (a block diagonal of a positive semi-definite contact Hessian is positive
+//!   semi-definite, so `P` stays positive definite).
 
 use crate::forces::{Force, Linearization};
 use crate::linalg::BlockMatrix;
+use crate::linalg::split::{Coupling, Split};
 use crate::math::{Mat3, Vec3};
+use std::sync::OnceLock;
 
 /// The matrices of the step's linear systems (see the module docs).
 pub(crate) struct System {
-    /// Mass and model forces on their fixed pattern; stale while `with_contacts` is false
-    /// (the system matrix then holds those values itself, on the same pattern).
+    /// `P`: mass, model forces, the contacts inside its pattern, the others' diagonal blocks.
     base: BlockMatrix,
-    /// Position in `matrix` of each block of `base` (while `with_contacts`).
-    base_slots: Vec<u32>,
-    /// What the preconditioner is built from while `with_contacts`.
-    precond: BlockMatrix,
-    /// The system matrix.
-    matrix: BlockMatrix,
-    /// Whether this step's contact pairs enlarge the system matrix's pattern.
-    with_contacts: bool,
+    /// The contacts outside the base pattern, when this step has any.
+    coupling: Option<Coupling>,
     /// Per contact force of this step: whether all its pairs are in the base pattern.
     inner: Vec<bool>,
+    /// `P + C` on one merged pattern, built on request after each assembly.
+    merged: OnceLock<BlockMatrix>,
 }
 
 impl System {
@@ -43,42 +41,39 @@ impl System {
         for f in forces {
             f.add_pattern(&mut pairs);
         }
-        let matrix = BlockMatrix::from_pairs(n, &pairs);
         System {
-            base: matrix.clone(),
-            base_slots: Vec::new(),
-            precond: matrix.clone(),
-            matrix,
-            with_contacts: false,
+            base: BlockMatrix::from_pairs(n, &pairs),
+            coupling: None,
             inner: Vec::new(),
+            merged: OnceLock::new(),
         }
     }
 
-    /// The system matrix of the last linearization.
-    pub fn matrix(&self) -> &BlockMatrix {
-        &self.matrix
-    }
-
-    /// What the preconditioner is built from: the system matrix itself when no contact
-    /// enlarges its pattern (PCG then multiplies by the multigrid's compact copy), else the
-    /// base matrix (with the contacts inside its pattern) plus the other contacts' diagonal
-    /// blocks.
-    pub fn preconditioner(&self) -> &BlockMatrix {
-        if !self.with_contacts {
-            &self.matrix
-        } else {
-            &self.precond
+    /// The system matrix of the last linearization, `P + C`; the preconditioner is built
+    /// from its `P`.
+    pub fn matrix(&self) -> Split<'_> {
+        Split {
+            p: &self.base,
+            coupling: self.coupling.as_ref(),
         }
     }
 
-    /// A zeroed copy of the base pattern (for the multigrid's reference matrix).
+    /// The system matrix of the last linearization on one pattern (built on first request:
+    /// for the direct solver and inspection).
+    pub fn merged(&self) -> &BlockMatrix {
+        if self.coupling.is_none() {
+            return &self.base;
+        }
+        self.merged.get_or_init(|| self.matrix().merged())
+    }
+
+    /// A copy of the base pattern (for the multigrid's reference matrix).
     pub fn base_pattern(&self) -> BlockMatrix {
         self.base.clone()
     }
 
-    /// Sets the system matrix's pattern for this step: the base pattern, or the base plus the
-    /// contact pairs of the `contacts` forces that are not all in it (then also where each base
-    /// block goes in it).
+    /// Sets this step's contacts: those of the `contacts` forces whose pairs are not all in
+    /// the base pattern go into a coupling on their own pairs.
     pub fn use_contacts(&mut self, contacts: &[&dyn Force]) {
         let n = self.base.n();
         let mut pairs = Vec::new();
@@ -94,27 +89,11 @@ impl System {
                 pairs.extend(own);
             }
         }
-        if self.inner.contains(&false) {
-            self.matrix = self.base.with_pairs(&pairs);
-            let (base, merged) = (&self.base, &self.matrix);
-            self.base_slots.clear();
-            for i in 0..n {
-                let (cols, _) = base.row(i);
-                let (mcols, mr) = merged.row(i);
-                let mut k = 0;
-                for c in cols {
-                    while mcols[k] != *c {
-                        k += 1;
-                    }
-                    self.base_slots.push((mr.start + k) as u32);
-                }
-            }
-            self.with_contacts = true;
-        } else if self.with_contacts {
-            // shares the base pattern again (the forces' gather lists stay valid)
-            self.matrix = self.base.clone();
-            self.with_contacts = false;
-        }
+        self.coupling = self
+            .inner
+            .contains(&false)
+            .then(|| Coupling::new(n, &pairs));
+        self.merged = OnceLock::new();
     }
 
     /// Assembles `A = M + a K + b D` at `(at.x, at.v)` with `(a, b) = at.matrix` (`-h²`, `-h`
@@ -131,12 +110,8 @@ impl System {
         mut vectors: Option<(&mut [Vec3], &mut [Vec3])>,
     ) {
         debug_assert!(contacts.is_empty() || contacts.len() == self.inner.len());
-        let inner = |k: usize| self.inner[k];
-        let base = if self.with_contacts {
-            &mut self.base
-        } else {
-            &mut self.matrix
-        };
+        self.merged = OnceLock::new();
+        let base = &mut self.base;
         set_mass(mass, base);
         let mut add = |force: &dyn Force, m: &mut BlockMatrix| match &mut vectors {
             Some((f, kw)) => force.add_linearization(at, f, m, kw),
@@ -146,27 +121,25 @@ impl System {
             add(force.as_ref(), base);
         }
         for (k, c) in contacts.iter().enumerate() {
-            if inner(k) {
+            if self.inner[k] {
                 add(*c, base);
             }
         }
-        if !self.with_contacts {
+        let Some(coupling) = &mut self.coupling else {
             return;
-        }
-        self.matrix.clear();
-        for (k, &slot) in self.base_slots.iter().enumerate() {
-            self.matrix.values[slot as usize] = self.base.values[k];
-        }
+        };
+        let m = coupling.matrix_mut();
+        m.clear();
         for (k, c) in contacts.iter().enumerate() {
-            if !inner(k) {
-                add(*c, &mut self.matrix);
+            if !self.inner[k] {
+                add(*c, m);
             }
         }
-        let p = &mut self.precond;
-        p.values.copy_from_slice(&self.base.values);
-        for i in 0..mass.len() {
-            let k = p.diag_index(i);
-            p.values[k] = self.matrix.values[self.matrix.diag_index(i)];
+        // P gets the outer contacts' diagonal blocks
+        let m = coupling.matrix();
+        for &i in coupling.rows() {
+            let (i, k) = (i as usize, base.diag_index(i as usize));
+            base.values[k] += m.values[m.diag_index(i)];
         }
     }
 }
@@ -245,8 +218,8 @@ mod tests {
     ) -> (System, Vec<Vec<f64>>) {
         let mut sys = System::new(m.particle_count(), forces);
         sys.assemble(&m.mass, forces, at, &[], None);
-        let base = sys.matrix().to_dense();
-        assert!(std::ptr::eq(sys.preconditioner(), sys.matrix()));
+        let base = sys.merged().to_dense();
+        assert!(sys.matrix().coupling.is_none());
         sys.use_contacts(&[contact]);
         sys.assemble(&m.mass, forces, at, &[contact], None);
         (sys, base)
@@ -262,8 +235,8 @@ mod tests {
         let at = linearization(&m, h);
         let (mut sys, base) = base_then_contact(&m, &forces, &at, &r);
         let only = blocks_of(&r, m.particle_count(), &at);
-        let full = sys.matrix().to_dense();
-        let pre = sys.preconditioner().to_dense();
+        let full = sys.merged().to_dense();
+        let pre = sys.matrix().p.to_dense();
         let mut coupled = 0;
         for i in 0..full.len() {
             for j in 0..full.len() {
@@ -286,8 +259,8 @@ mod tests {
         // back to no contacts: the base pattern again, and the same values as before
         sys.use_contacts(&[]);
         sys.assemble(&m.mass, &forces, &at, &[], None);
-        assert_eq!(sys.matrix().to_dense(), base);
-        assert!(std::ptr::eq(sys.preconditioner(), sys.matrix()));
+        assert_eq!(sys.merged().to_dense(), base);
+        assert!(sys.matrix().coupling.is_none());
     }
 
     /// A cloth–collider stencil on a cloth edge (with its tangential damping) adds no block to
@@ -303,13 +276,13 @@ mod tests {
         m.v.iter_mut().for_each(|v| *v = Vec3::ZERO);
         let at = linearization(&m, h);
         let (sys, base) = base_then_contact(&m, &forces, &at, &r);
-        let full = sys.matrix().to_dense();
+        let full = sys.merged().to_dense();
         // the stencil couples its two particles in every direction (normal penalty, tangential
         // damping), and the preconditioner holds exactly the system matrix
         for (i, j) in [(0, 3), (1, 4), (2, 5)] {
             assert!((full[i][j] - base[i][j]).abs() > 1e-3 * full[i][i].abs());
         }
-        assert_eq!(sys.preconditioner().to_dense(), full);
+        assert_eq!(sys.matrix().p.to_dense(), full);
     }
 
     /// With a cloth–cloth pair outside the pattern as well, the preconditioner is the system
@@ -325,8 +298,8 @@ mod tests {
         let mut sys = System::new(m.particle_count(), &forces);
         sys.use_contacts(&[&cloth, &rim]);
         sys.assemble(&m.mass, &forces, &at, &[&cloth, &rim], None);
-        let full = sys.matrix().to_dense();
-        let pre = sys.preconditioner().to_dense();
+        let full = sys.merged().to_dense();
+        let pre = sys.matrix().p.to_dense();
         let only = blocks_of(&cloth, m.particle_count(), &at);
         let rim_only = blocks_of(&rim, m.particle_count(), &at);
         assert!(rim_only[0][3] != 0.0 && only[0][3] == 0.0);
