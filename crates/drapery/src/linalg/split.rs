@@ -1,19 +1,26 @@
 //! A system matrix kept in two parts, `A = P + C` (docs/MATH.md §11): `P` on a fixed pattern,
-//! the matrix the preconditioner is built from, and `C` the off-diagonal blocks of a few
-//! couplings outside that pattern (a step's cloth–cloth contacts), held on their own small
-//! pattern. A step with contacts then needs no merged pattern: products read `P` (the
-//! multigrid's half-size copy of it, in PCG) and add the few rows `C` has.
+//! the matrix the preconditioner is built from, and `C` the blocks of a few couplings outside
+//! that pattern (a step's cloth–cloth contacts), held on their own small pattern. A step with
+//! contacts then needs no merged pattern: products read `P` (the multigrid's half-size copy of
+//! it, in PCG) and add the few rows `C` has.
+//!
+//! The couplings' diagonal blocks go into `P` together with a block-diagonal majorant of their
+//! off-diagonal ones ([`Coupling::move_majorant_into`]), so that `P ≥ A`: a preconditioner
+//! that lacks a contact's coupling but keeps only its diagonal is stiffer than `A` where two
+//! layers move together and softer where they press into each other; the majorant makes it
+//! no softer anywhere.
 
 use super::bsr::BlockMatrix;
-use crate::math::Vec3;
+use super::eigen::symmetric_eigen;
+use crate::math::{Mat3, Vec3};
 use rayon::prelude::*;
 
 /// Rows per task in the row-parallel product.
 const ROWS: usize = 256;
 
 /// Couplings between particles outside a fixed pattern: a block matrix on the couplings' own
-/// pairs (its diagonal blocks are where their forces put theirs; [`Split`] reads only the
-/// off-diagonal ones) and the particles that have any.
+/// pairs, and the particles that have any (the diagonal blocks of the others stay zero: a
+/// force on these pairs writes none there).
 #[derive(Clone, Debug)]
 pub struct Coupling {
     m: BlockMatrix,
@@ -32,7 +39,7 @@ impl Coupling {
         Coupling { m, rows }
     }
 
-    /// The blocks, diagonal ones included (what forces assemble into).
+    /// The blocks, diagonal ones included.
     pub fn matrix(&self) -> &BlockMatrix {
         &self.m
     }
@@ -47,21 +54,65 @@ impl Coupling {
         &self.rows
     }
 
-    /// Row `i` of `C x`, the off-diagonal blocks only.
+    /// Moves into `p`'s diagonal blocks the block-diagonal majorant `D` of these couplings,
+    /// `D_ii = C_ii + Σ_{j≠i} |C_ij|` with `|M| = (M Mᵀ)^½`, and keeps `C - D`: `p + C` is
+    /// unchanged, and `D - C` is positive semi-definite (each pair's
+    /// `[[|C_ij|, -C_ij], [-C_ji, |C_ji|]]` is, by the singular value decomposition of
+    /// `C_ij`), so the new `p` is at least `p + C` (docs/MATH.md §11). Rows in parallel, each
+    /// summed in column order: the same bits on any number of threads.
+    pub fn move_majorant_into(&mut self, p: &mut BlockMatrix) {
+        let m = &self.m;
+        let parts: Vec<(Mat3, Mat3)> = self
+            .rows
+            .par_iter()
+            .with_min_len(64)
+            .map(|&i| {
+                let (cols, r) = m.row(i as usize);
+                let mut sum = Mat3::ZERO;
+                for (&j, k) in cols.iter().zip(r) {
+                    if j != i {
+                        sum += abs(&m.values[k]);
+                    }
+                }
+                (m.values[m.diag_index(i as usize)] + sum, -sum)
+            })
+            .collect();
+        for (&i, (to_p, kept)) in self.rows.iter().zip(parts) {
+            let i = i as usize;
+            let k = p.diag_index(i);
+            p.values[k] += to_p;
+            let k = self.m.diag_index(i);
+            self.m.values[k] = kept;
+        }
+    }
+
+    /// Row `i` of `C x`.
     #[inline]
     pub fn row_product(&self, i: usize, x: &[Vec3]) -> Vec3 {
         let (cols, r) = self.m.row(i);
         let mut acc = Vec3::ZERO;
         for (&c, m) in cols.iter().zip(&self.m.values[r]) {
-            if c as usize != i {
-                acc += *m * x[c as usize];
-            }
+            acc += *m * x[c as usize];
         }
         acc
     }
 }
 
-/// `A = P + C`, `C` the off-diagonal blocks of `coupling` when there is one.
+/// `|M| = (M Mᵀ)^½`, the symmetric positive semi-definite factor of `M`'s polar decomposition
+/// `M = |M| U`.
+pub fn abs(m: &Mat3) -> Mat3 {
+    let g = *m * m.transpose();
+    let a: [[f64; 3]; 3] = std::array::from_fn(|r| std::array::from_fn(|c| g.col(c)[r]));
+    let (lambda, q) = symmetric_eigen(&a);
+    let mut out = Mat3::ZERO;
+    for (k, l) in lambda.iter().enumerate() {
+        let v = Vec3::new(q[0][k], q[1][k], q[2][k]);
+        out += crate::math::outer(v, v) * l.max(0.0).sqrt();
+    }
+    out
+}
+
+/// `A = P + C`, `C` the blocks of `coupling` when there is one.
 #[derive(Clone, Copy, Debug)]
 pub struct Split<'a> {
     /// The matrix on the fixed pattern (the preconditioner's).
@@ -119,9 +170,7 @@ impl<'a> Split<'a> {
         for &i in &c.rows {
             let (cols, r) = c.m.row(i as usize);
             for (&j, k) in cols.iter().zip(r) {
-                if j != i {
-                    a.add(i as usize, j as usize, c.m.values[k]);
-                }
+                a.add(i as usize, j as usize, c.m.values[k]);
             }
         }
         a
@@ -140,8 +189,7 @@ mod tests {
 
     proptest! {
         /// The split product, row by row and whole, is the product with the merged matrix, and
-        /// the merged matrix has `P`'s blocks, `C`'s off-diagonal ones, and nothing of `C`'s
-        /// diagonal.
+        /// that is `P`'s blocks plus `C`'s.
         #[test]
         fn the_split_product_is_the_merged_product(
             n in 2usize..30,
@@ -162,6 +210,13 @@ mod tests {
             };
             p.values.iter_mut().for_each(|m| *m = next());
             c.matrix_mut().values.iter_mut().for_each(|m| *m = next());
+            // a particle without a pair has no block (a force on these pairs writes none)
+            for i in 0..n {
+                if !c.rows().contains(&(i as u32)) {
+                    let k = c.matrix().diag_index(i);
+                    c.matrix_mut().values[k] = Mat3::ZERO;
+                }
+            }
             let x: Vec<Vec3> = (0..n).map(|i| Vec3::new(x[3 * i], x[3 * i + 1], x[3 * i + 2])).collect();
             let a = Split { p: &p, coupling: Some(&c) };
             let merged = a.merged();
@@ -170,11 +225,11 @@ mod tests {
             merged.mul_vec(&x, &mut want);
             for i in 0..n {
                 prop_assert!((y[i] - want[i]).length() <= 1e-12, "row {}", i);
-                // by hand: P's row plus C's off-diagonal blocks
+                // by hand: P's row plus C's
                 let mut by_hand = p.row_product(i, &x);
-                for j in 0..n {
-                    if j != i && let Some(k) = c.matrix().find(i, j) {
-                        by_hand += c.matrix().values[k] * x[j];
+                for (j, xj) in x.iter().enumerate() {
+                    if let Some(k) = c.matrix().find(i, j) {
+                        by_hand += c.matrix().values[k] * *xj;
                     }
                 }
                 prop_assert!((y[i] - by_hand).length() <= 1e-12, "row {}", i);
@@ -182,5 +237,112 @@ mod tests {
                 prop_assert_eq!(c.rows().contains(&(i as u32)), off);
             }
         }
+
+        /// Moving the majorant into `P` keeps `P + C` and leaves `P` at least `P + C`: for
+        /// couplings among 4 particles from a random positive semi-definite 12 × 12 matrix
+        /// (a contact stencil's Hessian; its blocks are not symmetric), the new `P` minus the
+        /// whole matrix has no negative eigenvalue.
+        #[test]
+        fn the_majorant_keeps_the_sum_and_bounds_the_matrix_from_above(
+            g in prop::collection::vec(-1.0f64..1.0, 144),
+        ) {
+            let n = 4;
+            let all: Vec<(u32, u32)> = (0..4).flat_map(|i| (i + 1..4).map(move |j| (i, j))).collect();
+            let mut c = Coupling::new(n, &all);
+            let h: Vec<Vec<f64>> = (0..12)
+                .map(|r| (0..12).map(|q| (0..12).map(|k| g[12 * r + k] * g[12 * q + k]).sum()).collect())
+                .collect();
+            for i in 0..n {
+                for j in 0..n {
+                    let b = Mat3::from_cols_array(&std::array::from_fn(|e| h[3 * i + e % 3][3 * j + e / 3]));
+                    c.matrix_mut().add(i, j, b);
+                }
+            }
+            let mut p = BlockMatrix::from_pairs(n, &[]);
+            let whole = Split { p: &p, coupling: Some(&c) }.merged().to_dense();
+            c.move_majorant_into(&mut p);
+            let sum = Split { p: &p, coupling: Some(&c) }.merged().to_dense();
+            let pd = p.to_dense();
+            let mut diff = [[0.0; 12]; 12];
+            for r in 0..12 {
+                for q in 0..12 {
+                    prop_assert!((sum[r][q] - whole[r][q]).abs() <= 1e-12 * (1.0 + whole[r][q].abs()));
+                    diff[r][q] = pd[r][q] - whole[r][q];
+                }
+            }
+            let (lambda, _) = symmetric_eigen(&diff);
+            let scale = whole.iter().flatten().fold(0.0f64, |s, v| s.max(v.abs()));
+            for l in lambda {
+                prop_assert!(l >= -1e-10 * scale, "P - A has eigenvalue {} (scale {})", l, scale);
+            }
+        }
+    }
+
+    /// `|M|² = M Mᵀ`, and `|M|` is symmetric positive semi-definite.
+    #[test]
+    fn abs_is_the_square_root_of_m_mt() {
+        let mut v = 0.3f64;
+        for _ in 0..200 {
+            let m = Mat3::from_cols_array(&std::array::from_fn(|_| {
+                v = (v * 9.7 + 0.13).fract();
+                2.0 * v - 1.0
+            }));
+            let a = abs(&m);
+            let want = m * m.transpose();
+            assert!(crate::math::max_abs(&(a * a - want)) <= 1e-12);
+            assert!(crate::math::max_abs(&(a - a.transpose())) <= 1e-12);
+            for x in [
+                Vec3::X,
+                Vec3::Y,
+                Vec3::Z,
+                Vec3::ONE,
+                Vec3::new(1.0, -2.0, 0.5),
+            ] {
+                assert!(x.dot(a * x) >= -1e-12);
+            }
+        }
+    }
+
+    /// Two particles pressed together by a contact `[[K, -K], [-K, K]]`, `K = k n nᵀ`: `P`
+    /// with only the diagonal blocks moved into it lies below the whole matrix where they move
+    /// apart (`2k` against `4k`); with the majorant it lies on or above it, moving apart and
+    /// moving together.
+    #[test]
+    fn with_only_the_diagonal_the_preconditioner_is_softer_than_the_contact() {
+        let k = crate::math::outer(Vec3::Y, Vec3::Y) * 5.0;
+        let mut c = Coupling::new(2, &[(0, 1)]);
+        c.matrix_mut().add(0, 0, k);
+        c.matrix_mut().add(1, 1, k);
+        c.matrix_mut().add(0, 1, -k);
+        c.matrix_mut().add(1, 0, -k);
+        let energy = |a: Split, x: [Vec3; 2]| {
+            let mut y = [Vec3::ZERO; 2];
+            a.mul_vec(&x, &mut y);
+            x[0].dot(y[0]) + x[1].dot(y[1])
+        };
+        let (apart, together) = ([Vec3::Y, -Vec3::Y], [Vec3::Y, Vec3::Y]);
+        let zero = BlockMatrix::from_pairs(2, &[]);
+        let whole = Split {
+            p: &zero,
+            coupling: Some(&c),
+        };
+        assert_eq!((energy(whole, apart), energy(whole, together)), (20.0, 0.0));
+        let mut diagonal = BlockMatrix::from_pairs(2, &[]);
+        diagonal.add(0, 0, k);
+        diagonal.add(1, 1, k);
+        assert_eq!(energy(Split::whole(&diagonal), apart), 10.0);
+        let mut p = BlockMatrix::from_pairs(2, &[]);
+        c.move_majorant_into(&mut p);
+        let (a, t) = (
+            energy(Split::whole(&p), apart),
+            energy(Split::whole(&p), together),
+        );
+        assert!(a >= 20.0 - 1e-12 && t >= 0.0, "{a} {t}");
+        let split = Split {
+            p: &p,
+            coupling: Some(&c),
+        };
+        assert!((energy(split, apart) - 20.0).abs() < 1e-12);
+        assert!(energy(split, together).abs() < 1e-12);
     }
 }
