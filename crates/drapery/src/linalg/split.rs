@@ -58,8 +58,9 @@ impl Coupling {
     /// `D_ii = C_ii + Σ_{j≠i} |C_ij|` with `|M| = (M Mᵀ)^½`, and keeps `C - D`: `p + C` is
     /// unchanged, and `D - C` is positive semi-definite (each pair's
     /// `[[|C_ij|, -C_ij], [-C_ji, |C_ji|]]` is, by the singular value decomposition of
-    /// `C_ij`), so the new `p` is at least `p + C` (docs/MATH.md §11). Rows in parallel, each
-    /// summed in column order: the same bits on any number of threads.
+    /// `C_ij`), so the new `p` bounds the whole matrix (the old `p + C`) from above
+    /// (docs/MATH.md §11). Rows in parallel, each summed in column order: the same bits on any
+    /// number of threads.
     pub fn move_majorant_into(&mut self, p: &mut BlockMatrix) {
         let m = &self.m;
         let parts: Vec<(Mat3, Mat3)> = self
