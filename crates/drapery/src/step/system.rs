@@ -16,8 +16,8 @@
 //!   is no `C` and `A = P`.
 //! * So `P ≥ A`: the preconditioner is positive definite, lacks the contacts' coupling, and is
 //!   nowhere softer than the system (with the contacts' diagonal blocks alone it was softer
-//!   where two layers press into each other, and PCG took up to 1.7 times the iterations at
-//!   290², docs/MATH.md §11).
+//!   where two layers press into each other, and PCG took 1.4 and 1.8 times the iterations at
+//!   two saved 290² states, docs/MATH.md §11).
 
 use crate::forces::{Force, Linearization};
 use crate::linalg::BlockMatrix;
