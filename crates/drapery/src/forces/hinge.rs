@@ -355,8 +355,8 @@ const OFF_TRANSLATION: [[f64; 4]; 3] = [
 /// The positive semi-definite projection of a translation-invariant `h` (`h t = 0` for every
 /// translation `t`): its eigenvectors of non-zero eigenvalue lie off the translations, so the
 /// projection is that of the 9 × 9 `Qᵀ h Q` (`Q = OFF_TRANSLATION ⊗ I₃`), mapped back — the
-/// 12 × 12 projection at about half the cost of the Jacobi sweeps. (The rounding of `h` along
-/// the translations is dropped: the result annihilates them exactly.)
+/// 12 × 12 projection for an eigen-decomposition of 9 × 9, not 12 × 12. (The rounding of `h`
+/// along the translations is dropped: the result annihilates them exactly.)
 fn psd_off_translations(h: &Matrix12) -> Matrix12 {
     // t = Qᵀ h (9 × 12), then r = t Q (9 × 9)
     let mut t = [[0.0; 12]; 9];
