@@ -209,13 +209,15 @@ struct GridTable {
     normal: Option<[f64; 3]>,
 }
 
-/// `disc = { radius, edge_length, center, normal }`: a flat disc triangulated in rings
-/// ([`crate::textile::drape::disc`]), e.g. a Cusick drape specimen.
+/// `disc = { radius, edge_length, ring, center, normal }`: a flat disc triangulated in rings
+/// ([`crate::textile::drape::disc`]), e.g. a Cusick drape specimen; with `ring`, one ring on
+/// that radius ([`crate::textile::drape::disc_with_ring`]).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct DiscTable {
     radius: f64,
     edge_length: f64,
+    ring: Option<f64>,
     center: Option<[f64; 3]>,
     normal: Option<[f64; 3]>,
 }
@@ -643,7 +645,11 @@ fn disc_mesh(d: &DiscTable, what: &str) -> std::result::Result<Mesh, String> {
     if normal.length() == 0.0 {
         return Err(format!("{what}disc.normal must be a non-zero vector"));
     }
-    let flat = crate::textile::drape::disc(radius, edge).map_err(|e| format!("{what}{e}"))?;
+    let flat = match d.ring {
+        None => crate::textile::drape::disc(radius, edge),
+        Some(ring) => crate::textile::drape::disc_with_ring(radius, edge, ring),
+    }
+    .map_err(|e| format!("{what}{e}"))?;
     Ok(flat.placed(center, normal))
 }
 

@@ -229,6 +229,47 @@ fn coefficient(area: f64, support_radius: f64, sample_radius: f64) -> f64 {
 /// Errors if `radius` or `edge_length` is not a finite number > 0 or the disc would need more
 /// than 2²⁴ vertices.
 pub fn disc(radius: f64, edge_length: f64) -> Result<Mesh> {
+    check_disc(radius, edge_length)?;
+    let rings = (radius / edge_length).ceil() as usize;
+    let radii = (1..=rings).map(|k| radius * k as f64 / rings as f64);
+    Ok(zip_rings(radii.zip((1..=rings).map(|k| 6 * k)).collect()))
+}
+
+/// [`disc`] with a ring of vertices on the circle of radius `ring` (`0 < ring < radius`; the
+/// rim of a drape tester's support): `n₁ = ⌈ring / edge_length⌉` rings evenly spaced inside it,
+/// ring `k` with `6k` vertices, and `n₂ = ⌈(radius − ring) / edge_length⌉` evenly spaced from it
+/// to the edge, each with 6 times its radius over that spacing (rounded) vertices, so both
+/// parts' edges are close to their spacing (both at most `edge_length`, up to rounding).
+///
+/// Errors as [`disc`], and if `ring` is not strictly between 0 and `radius`.
+pub fn disc_with_ring(radius: f64, edge_length: f64, ring: f64) -> Result<Mesh> {
+    check_disc(radius, edge_length)?;
+    if !(ring.is_finite() && ring > 0.0 && ring < radius) {
+        return Err(Error::Invalid(format!(
+            "disc: ring must lie strictly between 0 and the radius {radius}, got {ring}"
+        )));
+    }
+    // a quotient within rounding above a whole number is that number
+    let count = |length: f64| ((length / edge_length) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
+    let (inner, outer) = (count(ring), count(radius - ring));
+    let spacing = (radius - ring) / outer as f64;
+    let mut rings: Vec<(f64, usize)> = (1..=inner)
+        .map(|k| (ring * k as f64 / inner as f64, 6 * k))
+        .collect();
+    for j in 1..=outer {
+        let r = if j == outer {
+            radius
+        } else {
+            ring + (radius - ring) * j as f64 / outer as f64
+        };
+        let m = (6.0 * (r / spacing).round()) as usize;
+        rings.push((r, m.max(rings.last().map_or(6, |l| l.1))));
+    }
+    Ok(zip_rings(rings))
+}
+
+/// The argument checks of [`disc`] and [`disc_with_ring`].
+fn check_disc(radius: f64, edge_length: f64) -> Result<()> {
     for (name, v) in [("radius", radius), ("edge_length", edge_length)] {
         if !(v.is_finite() && v > 0.0) {
             return Err(Error::Invalid(format!(
@@ -236,14 +277,19 @@ pub fn disc(radius: f64, edge_length: f64) -> Result<Mesh> {
             )));
         }
     }
-    let rings = (radius / edge_length).ceil();
-    if rings > 2000.0 {
+    if (radius / edge_length).ceil() > 2000.0 {
         return Err(Error::Invalid(format!(
             "disc: radius / edge_length = {} needs too many vertices (at most 2000 rings)",
             radius / edge_length
         )));
     }
-    let rings = rings as usize;
+    Ok(())
+}
+
+/// The disc whose rings are `(radius, vertex count)`, inside out, around a centre vertex: ring
+/// `k`'s vertices at equal angles (odd rings start at 0, even ones half a step on, so the strips
+/// zig-zag), and each strip between two rings zipped by increasing angle.
+fn zip_rings(rings: Vec<(f64, usize)>) -> Mesh {
     let tau = std::f64::consts::TAU;
     // alternate rings are turned by half a step so the strips between them zig-zag
     let offset = |ring: usize| if ring.is_multiple_of(2) { 0.5 } else { 0.0 };
@@ -251,9 +297,8 @@ pub fn disc(radius: f64, edge_length: f64) -> Result<Mesh> {
     // first vertex index and vertex count of each ring
     let mut start = vec![0usize];
     let mut count = vec![1usize];
-    for k in 1..=rings {
-        let r = radius * k as f64 / rings as f64;
-        let m = 6 * k;
+    for (k, &(r, m)) in rings.iter().enumerate() {
+        let k = k + 1;
         start.push(positions.len());
         count.push(m);
         for i in 0..m {
@@ -265,11 +310,12 @@ pub fn disc(radius: f64, edge_length: f64) -> Result<Mesh> {
         tau * ((v - start[ring]) as f64 + offset(ring)) / count[ring] as f64
     };
     let mut faces = Vec::new();
-    for k in 1..=rings {
+    for k in 1..=rings.len() {
         if k == 1 {
-            for i in 0..6 {
+            let first = count[1];
+            for i in 0..first {
                 let a = start[1] + i;
-                let b = start[1] + (i + 1) % 6;
+                let b = start[1] + (i + 1) % first;
                 faces.push(Face::Tri([0, a as u32, b as u32]));
             }
             continue;
@@ -308,11 +354,11 @@ pub fn disc(radius: f64, edge_length: f64) -> Result<Mesh> {
         }
     }
     // a disc has no line elements
-    Ok(Mesh {
+    Mesh {
         positions,
         faces,
         ..Mesh::default()
-    })
+    }
 }
 
 /// The Cusick tester's support: a closed cylinder of `radius` (m) about the z axis, its flat top
@@ -412,6 +458,55 @@ mod tests {
         assert!(disc(0.0, 0.01).is_err());
         assert!(disc(0.1, f64::NAN).is_err());
         assert!(disc(1.0, 1e-6).is_err());
+    }
+
+    /// With a ring on the support's rim: a valid disc with a ring of vertices on that circle,
+    /// the circle's area, edges close to the two parts' spacings, counter-clockwise triangles.
+    #[test]
+    fn disc_with_a_ring_has_vertices_on_the_ring() {
+        for (r, e, ring) in [
+            (RD, 0.02, RS),
+            (RD, 0.01, RS),
+            (RD, 0.005, RS),
+            (1.0, 0.07, 0.33),
+        ] {
+            let m = disc_with_ring(r, e, ring).unwrap();
+            m.validate("disc").unwrap();
+            for t in m.triangles() {
+                let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                assert!((b - a).cross(c - a).z > 0.1 * e * e, "{t:?}");
+            }
+            let (v, ed, f) = (m.vertex_count(), m.edges().len(), m.faces.len());
+            assert_eq!(v as isize - ed as isize + f as isize, 1);
+            let on = |radius: f64| {
+                m.positions
+                    .iter()
+                    .filter(|p| (p.length() - radius).abs() < 1e-12)
+                    .count()
+            };
+            let inner = (ring / e * (1.0 - 1e-12)).ceil() as usize;
+            assert_eq!(on(ring), 6 * inner, "r {r}, e {e}");
+            assert!(on(r) >= 6 * inner);
+            let area = area_of(&m);
+            assert!((area / (PI * r * r) - 1.0).abs() < 0.01, "{area}");
+            // the plain disc's bounds, (0.5, 1.5) times the spacing, with spacings in [0.8 e, e]
+            for [u, w] in m.edges() {
+                let d = (m.positions[u as usize] - m.positions[w as usize]).length();
+                assert!(d > 0.4 * e && d < 1.5 * e, "{d} against {e}");
+            }
+        }
+        // at 1 cm the rings of the plain disc already fall on 9 cm: the same vertices
+        let (plain, ringed) = (
+            disc(RD, 0.01).unwrap(),
+            disc_with_ring(RD, 0.01, RS).unwrap(),
+        );
+        assert_eq!(plain.faces, ringed.faces);
+        for (p, q) in plain.positions.iter().zip(&ringed.positions) {
+            assert!((*p - *q).length() < 1e-15);
+        }
+        for ring in [0.0, RD, 0.2, -0.1, f64::NAN] {
+            assert!(disc_with_ring(RD, 0.01, ring).is_err(), "{ring}");
+        }
     }
 
     fn tri(m: &Mesh) -> Vec<[u32; 3]> {
