@@ -645,6 +645,13 @@ fn disc_mesh(d: &DiscTable, what: &str) -> std::result::Result<Mesh, String> {
     if normal.length() == 0.0 {
         return Err(format!("{what}disc.normal must be a non-zero vector"));
     }
+    if let Some(ring) = d.ring
+        && !(ring.is_finite() && ring > 0.0 && ring < radius)
+    {
+        return Err(format!(
+            "{what}disc.ring must lie strictly between 0 and disc.radius {radius}, got {ring}"
+        ));
+    }
     let flat = match d.ring {
         None => crate::textile::drape::disc(radius, edge),
         Some(ring) => crate::textile::drape::disc_with_ring(radius, edge, ring),
@@ -720,6 +727,27 @@ pin = [0, 2]
         );
         let e = load(&both).unwrap_err().to_string();
         assert!(e.contains("give one of mesh, grid and disc"), "{e}");
+        // a ring of vertices inside the disc: on its circle; outside it: an error
+        let ringed = disc.replace("edge_length = 0.05", "edge_length = 0.05, ring = 0.1");
+        let m = &load(&ringed).unwrap().cloths[0].mesh;
+        let on_ring = m
+            .positions
+            .iter()
+            .filter(|p| ((p.x * p.x + p.z * p.z).sqrt() - 0.1).abs() < 1e-12)
+            .count();
+        assert_eq!(on_ring, 12);
+        for ring in ["0.15", "0", "-0.1"] {
+            let text = disc.replace(
+                "edge_length = 0.05",
+                &format!("edge_length = 0.05, ring = {ring}"),
+            );
+            let e = load(&text).unwrap_err().to_string();
+            assert!(
+                e.contains("disc.ring must lie strictly between 0 and disc.radius 0.15")
+                    && e.contains("cloth[0] 'sheet'"),
+                "{e}"
+            );
+        }
     }
 
     #[test]
