@@ -6,7 +6,8 @@
 //! `twist-N` is wrung by two handles turning opposite ways (self-collision on).
 //! Two textile scenes on the shell model, `N` their **edge length in mm**: `cantilever-N`, a
 //! 16 cm strip clamped at one end sagging (tests/it/textile.rs), and `cusick-N`, a 30 cm
-//! cotton disc draping over an 18 cm support (tests/it/drape.rs).
+//! cotton disc (a ring of vertices on the support's rim) draping over an 18 cm support
+//! (tests/it/drape.rs).
 //! `spin-N`: the rotating sphere of issue 18, a 1.6 m cloth of N × N vertices dropped onto a
 //! sphere of radius 0.5 m spinning at 180°/s (friction 0.4, self-collision on), at dt = 0.01 s,
 //! 4 steps per frame; `spin-free-N` is the same cloth without collisions, warmed up as

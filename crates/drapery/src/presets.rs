@@ -327,12 +327,14 @@ fn cantilever(h: f64) -> Result<Model> {
     Model::new(vec![cloth], Vec3::new(0.0, -9.81, 0.0))
 }
 
-/// The Cusick drape test: a 30 cm `cotton` disc at edge length `h` m, 3 mm above the top
-/// (y = 0) of a closed support cylinder of 18 cm diameter.
+/// The Cusick drape test: a 30 cm `cotton` disc at edge length `h` m with a ring of vertices on
+/// the support's rim (as `examples/cusick.toml`), 3 mm above the top (y = 0) of a closed support
+/// cylinder of 18 cm diameter.
 fn cusick(h: f64) -> Result<Model> {
     let f = crate::textile::fabrics::fabric("cotton")
         .ok_or_else(|| Error::Invalid("no cotton preset".into()))?;
-    let mesh = crate::textile::drape::disc(0.15, h)?.placed(Vec3::new(0.0, 0.003, 0.0), Vec3::Y);
+    let mesh = crate::textile::drape::disc_with_ring(0.15, h, 0.09)?
+        .placed(Vec3::new(0.0, 0.003, 0.0), Vec3::Y);
     let support = crate::textile::drape::support(0.09, 0.01, 128)?.placed(Vec3::ZERO, Vec3::Y);
     let material = Material {
         damping: 0.0,

@@ -438,6 +438,43 @@ mod tests {
             prop_assert!(max_diff(&pp, &p) < 1e-12 * scale);
         }
 
+        /// The projection is the positive part of a matrix built from a known spectrum with one
+        /// to eight negative eigenvalues, and exactly symmetric.
+        #[test]
+        fn projection_is_the_positive_part_of_a_known_spectrum(
+            u in prop::collection::vec(-1.0f64..1.0, 81),
+            negatives in 1usize..9,
+        ) {
+            // a = Σ_k w_k u_k u_kᵀ with u_k orthonormalized by Gram–Schmidt, w known
+            let mut basis: Vec<[f64; 9]> = Vec::new();
+            for k in 0..9 {
+                let mut v: [f64; 9] = std::array::from_fn(|i| u[9 * k + i] + if i == k { 2.0 } else { 0.0 });
+                for b in &basis {
+                    let d: f64 = (0..9).map(|i| v[i] * b[i]).sum();
+                    for i in 0..9 {
+                        v[i] -= d * b[i];
+                    }
+                }
+                let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+                basis.push(v.map(|x| x / n));
+            }
+            let w: [f64; 9] = std::array::from_fn(|k| if k < negatives { -1.0 - k as f64 } else { 0.5 + k as f64 });
+            let a: [[f64; 9]; 9] = std::array::from_fn(|i| std::array::from_fn(|j| {
+                (0..9).map(|k| w[k] * basis[k][i] * basis[k][j]).sum()
+            }));
+            let want: [[f64; 9]; 9] = std::array::from_fn(|i| std::array::from_fn(|j| {
+                (0..9).filter(|&k| w[k] > 0.0).map(|k| w[k] * basis[k][i] * basis[k][j]).sum()
+            }));
+            let mut p = a;
+            project_psd(&mut p);
+            prop_assert!(max_diff(&p, &want) < 1e-12, "{}", max_diff(&p, &want));
+            for i in 0..9 {
+                for j in 0..9 {
+                    prop_assert_eq!(p[i][j], p[j][i]);
+                }
+            }
+        }
+
         #[test]
         fn a_psd_matrix_is_left_bit_for_bit(v in prop::collection::vec(-5.0f64..5.0, 36)) {
             // BᵀB + I is positive definite
