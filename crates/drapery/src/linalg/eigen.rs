@@ -6,8 +6,9 @@
 //! The size is a compile-time constant (a membrane triangle's reduced Hessian is 6 × 6, a
 //! hinge's 9 × 9); every loop runs in a fixed order with plain `+ − × ÷ √`, so the result has
 //! the same bits everywhere. The algorithm is the one of EISPACK's `tred2` and `tql2` (Bowdler,
-//! Martin, Reinsch & Wilkinson 1968; Golub & Van Loan §8.3): about five times fewer operations
-//! than cyclic Jacobi rotations at these sizes, which the tests keep as the reference.
+//! Martin, Reinsch & Wilkinson 1968; Golub & Van Loan §8.3). It replaced cyclic Jacobi
+//! rotations, which the tests keep as the reference: the projection took 2.5 times less time on
+//! `examples/cusick.toml` (BENCHMARKS.md, sixteenth session).
 
 /// Implicit QL iterations per eigenvalue before accepting the current one (it converges
 /// cubically: two or three iterations reach rounding).
@@ -21,14 +22,16 @@ fn norm2(a: f64, b: f64) -> f64 {
     (a * a + b * b).sqrt()
 }
 
+/// The `N × N` identity.
+fn identity<const N: usize>() -> [[f64; N]; N] {
+    std::array::from_fn(|i| std::array::from_fn(|j| if i == j { 1.0 } else { 0.0 }))
+}
+
 /// Householder reduction of the symmetric `a` (full storage, both triangles equal) to a
 /// tridiagonal `T = Qᵀ a Q`: returns `Q`, the diagonal of `T` and its off-diagonal
 /// (`off[i] = T[i][i+1]`, `off[N-1] = 0`).
 fn tridiagonalize<const N: usize>(mut a: [[f64; N]; N]) -> ([[f64; N]; N], [f64; N], [f64; N]) {
-    let mut q = [[0.0; N]; N];
-    for (i, row) in q.iter_mut().enumerate() {
-        row[i] = 1.0;
-    }
+    let mut q = identity();
     let mut v = [0.0; N];
     let mut p = [0.0; N];
     for k in 0..N.saturating_sub(2) {
@@ -160,11 +163,7 @@ pub fn symmetric_eigen<const N: usize>(a: &[[f64; N]; N]) -> ([f64; N], [[f64; N
     }
     let scale = m.iter().flatten().fold(0.0f64, |s, &v| s.max(v.abs()));
     if scale == 0.0 || !scale.is_finite() {
-        let mut q = [[0.0; N]; N];
-        for (i, row) in q.iter_mut().enumerate() {
-            row[i] = 1.0;
-        }
-        return (std::array::from_fn(|i| m[i][i]), q);
+        return (std::array::from_fn(|i| m[i][i]), identity());
     }
     let (mut q, mut d, mut e) = tridiagonalize(m);
     tridiagonal_ql(&mut d, &mut e, &mut q);
@@ -208,10 +207,7 @@ mod tests {
     /// independent of the Householder–QL code; eigenvalues and eigenvectors (columns).
     fn jacobi<const N: usize>(a: &[[f64; N]; N]) -> ([f64; N], [[f64; N]; N]) {
         let mut m = *a;
-        let mut q = [[0.0; N]; N];
-        for (i, row) in q.iter_mut().enumerate() {
-            row[i] = 1.0;
-        }
+        let mut q = identity();
         for _ in 0..100 {
             let off: f64 = (0..N)
                 .flat_map(|i| (i + 1..N).map(move |j| (i, j)))
@@ -410,10 +406,7 @@ mod tests {
                     qtq[i][j] = (0..12).map(|k| q[k][i] * q[k][j]).sum();
                 }
             }
-            let mut eye = [[0.0; 12]; 12];
-            for (i, row) in eye.iter_mut().enumerate() {
-                row[i] = 1.0;
-            }
+            let eye: [[f64; 12]; 12] = identity();
             prop_assert!(max_diff(&back, &a) < 1e-12 * 60.0, "reconstruction {}", max_diff(&back, &a));
             prop_assert!(max_diff(&qtq, &eye) < 1e-13, "orthogonality {}", max_diff(&qtq, &eye));
         }
