@@ -422,16 +422,16 @@ impl Both<'_> {
         if (a.is_marked() || b.is_marked()) && !(a.prim_marked(i) || b.prim_marked(j)) {
             return;
         }
-        if a.prims[i].meets(&b.prims[j]) {
-            let (p, q) = (a.order[i], b.order[j]);
-            let (p, q) = if std::ptr::eq(a, b) {
-                (p.min(q), p.max(q))
-            } else {
-                (p, q)
-            };
-            if keep(p, q) {
-                out.push((p, q));
-            }
+        let (p, q) = (a.order[i], b.order[j]);
+        let (p, q) = if std::ptr::eq(a, b) {
+            (p.min(q), p.max(q))
+        } else {
+            (p, q)
+        };
+        // `keep` first: it is an index test, and most pairs of neighbouring boxes are
+        // neighbours in the mesh (sharing a vertex), which it drops
+        if keep(p, q) && a.prims[i].meets(&b.prims[j]) {
+            out.push((p, q));
         }
     }
 
