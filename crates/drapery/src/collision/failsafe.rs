@@ -24,6 +24,7 @@ use super::ccd::{
 };
 use super::distance::{point_triangle, segment_segment};
 use super::settings::Obstacle;
+use super::sweep::{Stop, obstacle_stop};
 use super::zones::Zones;
 use crate::math::Vec3;
 use rayon::prelude::*;
@@ -154,52 +155,6 @@ fn stuck_message(ids: &[u32; 4], n: usize, pinned: &[bool]) -> String {
         "collisions could not be resolved by continuous collision detection: particles {} keep colliding with their vertices back at the start of the step (pinned cloth or a moving obstacle passing through it?)",
         cloth.join(", ")
     )
-}
-
-/// Sweeps `x0 → x1` against an analytic obstacle over `[t0, t0 + h]`; returns the fraction of
-/// the path at which the particle comes within `stop` of the surface.
-fn sweep(o: &Obstacle, x0: Vec3, x1: Vec3, t0: f64, h: f64, stop: f64) -> Option<f64> {
-    let col = &o.collider;
-    let len = (x1 - x0).length();
-    let c = col.center();
-    let (speed, spin) = col.speed_bound(t0, t0 + h);
-    let reach = (x0 - c).length().max((x1 - c).length()) + len + speed * h;
-    // bound on d(distance)/ds along the path (surface point speeds × h plus the path length)
-    let rate = len + h * (speed + spin * reach);
-    let mut s = 0.0;
-    for _ in 0..1000 {
-        let d = col.closest(x0 + s * (x1 - x0), t0 + s * h).signed_distance;
-        if d < stop {
-            return Some(s);
-        }
-        if s >= 1.0 || rate == 0.0 {
-            return None;
-        }
-        s = (s + ((d - 0.5 * stop) / rate).max(1e-6)).min(1.0);
-    }
-    Some(s)
-}
-
-/// What an analytic obstacle does to a particle's path `x0 → end` over `[t0, t0 + h]`.
-enum Stop {
-    /// It started within `stop` of the obstacle (or inside) and ends so: put it here, `stop`
-    /// out at `t0 + h`.
-    Project(Vec3),
-    /// Its path comes within `stop` at this fraction of it ([`sweep`]).
-    Hit(f64),
-}
-
-/// The analytic obstacle's rule for a path (the fail-safe's stage 1): a particle that starts
-/// within `stop` of it only has to end `stop` out; any other is swept. `None` when the path
-/// keeps clear.
-fn obstacle_stop(o: &Obstacle, x0: Vec3, end: Vec3, t0: f64, h: f64, stop: f64) -> Option<Stop> {
-    if o.collider.closest(x0, t0).signed_distance < stop {
-        // started (too) close: only make sure it ends outside
-        let c = o.collider.closest(end, t0 + h);
-        (c.signed_distance < stop).then(|| Stop::Project(c.point + c.normal * stop))
-    } else {
-        sweep(o, x0, end, t0, h, stop).map(Stop::Hit)
-    }
 }
 
 /// Makes the end-of-step positions `x1` free of crossings (see the module docs), letting

@@ -35,5 +35,6 @@ pub mod proximity;
 pub mod repulsion;
 pub mod seams;
 pub mod settings;
+mod sweep;
 pub mod tessellate;
 mod zones;
