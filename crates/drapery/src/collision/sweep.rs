@@ -173,7 +173,7 @@ mod tests {
 
     /// The case the bound is for: a particle resting 2 mm above a sphere of radius 0.5 m that
     /// turns at 180°/s, carried 1.6 cm along its surface in a step, is proved clear (without
-    /// the bound the advancement would take about `rate / (d - stop/2)` ≈ 25 evaluations).
+    /// the bound the advancement would take about `rate / (d - stop/2)` ≈ 17 evaluations).
     #[test]
     fn a_particle_carried_along_a_turning_sphere_is_proved_clear() {
         let w = std::f64::consts::PI;
