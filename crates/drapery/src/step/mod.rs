@@ -39,7 +39,7 @@ pub mod tangles;
 mod testing;
 
 pub use report::{StageTimes, StepReport};
-pub use settings::{LinearSolver, SolverSettings};
+pub use settings::{FIRST_CONTACT_TOLERANCE, LinearSolver, SolverSettings};
 pub use tangles::Tangled;
 
 use crate::collision::broad_phase::Candidates;
@@ -229,6 +229,17 @@ impl Simulation {
         work.dv.resize(n, Vec3::ZERO);
         let (mut x, mut v) = (start.x0.clone(), start.v0.clone());
         let mut active = ActiveSet::new(contacts.obstacle.clone());
+        // where obstacle contact begins, the step is solved to at least FIRST_CONTACT_TOLERANCE
+        let candidates = &contacts.obstacle;
+        let first_contact = !candidates.is_empty()
+            && (candidates.iter()).all(|c| self.normal_force[c.particle as usize] == 0.0);
+        let solver_settings = SolverSettings {
+            tolerance: match first_contact {
+                true => self.settings.tolerance.min(FIRST_CONTACT_TOLERANCE),
+                false => self.settings.tolerance,
+            },
+            ..self.settings
+        };
         let gh = self.model.gravity.length() * h;
         let newton = self.settings.newton_iterations;
         let potential = Potential {
@@ -272,7 +283,7 @@ impl Simulation {
             solve::on_active_set(
                 &self.system,
                 &mut self.solvers,
-                &self.settings,
+                &solver_settings,
                 &problem,
                 &mut active,
                 &mut work.dv,

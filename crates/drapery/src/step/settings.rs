@@ -13,12 +13,20 @@ pub enum LinearSolver {
     Direct,
 }
 
+/// The PCG tolerance, at most, of a step in which obstacle contact begins: it has contact
+/// candidates and the previous step held none of them. What the cloth does after such a first
+/// contact depends on that step's solve to about this accuracy: a pile dropped at 1e-3 did a
+/// ninth of the self-contact work of the exact solve, and at 1e-6 the same (docs/ROUNDING.md,
+/// seventeenth session). Later steps keep `tolerance`.
+pub const FIRST_CONTACT_TOLERANCE: f64 = 1e-6;
+
 /// Tunables of the time step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SolverSettings {
     /// Newton iterations per step; 1 is the seeds' linearized step (default: 1).
     pub newton_iterations: u32,
-    /// PCG relative residual `‖r‖/‖b‖` (default: 1e-6).
+    /// PCG relative residual `‖r‖/‖b‖` (default: 1e-6); a step where obstacle contact begins
+    /// uses at most [`FIRST_CONTACT_TOLERANCE`].
     pub tolerance: f64,
     /// PCG iteration cap (default: 1000).
     pub max_iterations: usize,
