@@ -15,20 +15,25 @@ use crate::math::Vec3;
 /// Sweeps `x0 → x1` against an analytic obstacle over `[t0, t0 + h]`; returns the fraction of
 /// the path at which the particle comes within `stop` of the surface.
 pub(crate) fn sweep(o: &Obstacle, x0: Vec3, x1: Vec3, t0: f64, h: f64, stop: f64) -> Option<f64> {
-    let col = &o.collider;
-    let len = (x1 - x0).length();
-    let c = col.center();
-    let (speed, spin) = col.speed_bound(t0, t0 + h);
-    let reach = (x0 - c).length().max((x1 - c).length()) + len + speed * h;
-    // bound on d(distance)/ds along the path (surface point speeds × h plus the path length)
-    let rate = len + h * (speed + spin * reach);
+    let (speed, spin) = o.collider.speed_bound(t0, t0 + h);
+    let rate = rate(o, x0, x1, h, speed, spin);
     // When the distance stays at least `stop` all along, each advance is at least
     // `stop / (2 rate)`, so `advance` reaches the end within its 1000 evaluations and returns
     // `None`; a proof of that distance then gives the same answer without the evaluations.
-    if 2.0 * rate <= 998.0 * stop && clear_of_sphere(o, x0, x1, t0, h, stop) {
+    if 2.0 * rate <= 998.0 * stop && clear_of_sphere(o, x0, x1, t0, h, stop, speed) {
         return None;
     }
     advance(o, x0, x1, t0, h, stop, rate)
+}
+
+/// Bound on the change of the signed distance per unit fraction of the path `x0 → x1` over a
+/// step `h`: the path's length plus the surface's point speeds (the obstacle's linear `speed`
+/// and its turn `spin` at the path's greatest reach from the centre) times `h`.
+fn rate(o: &Obstacle, x0: Vec3, x1: Vec3, h: f64, speed: f64, spin: f64) -> f64 {
+    let len = (x1 - x0).length();
+    let c = o.collider.center();
+    let reach = (x0 - c).length().max((x1 - c).length()) + len + speed * h;
+    len + h * (speed + spin * reach)
 }
 
 /// Conservative advancement along `x0 → x1` with `rate` bounding the change of the signed
@@ -56,15 +61,23 @@ const ROUNDING: f64 = 1e-9;
 
 /// True when the obstacle is a sphere and the path `x0 → x1` over `[t0, t0 + h]` keeps more
 /// than `stop` (plus [`ROUNDING`]) from its surface. A sphere turning about its centre keeps its
-/// surface in place, and its centre moves at most `speed · h` over the step (the motion's speed
-/// bound), so at any fraction of the path the particle is at least its distance to the segment's
-/// closest point to the start centre, less `speed · h`, less the radius, from the surface.
+/// surface in place, and its centre moves at most `speed · h` over the step (`speed`, the
+/// obstacle's speed bound over the step), so at any fraction of the path the particle is at
+/// least its distance to the segment's closest point to the start centre, less `speed · h`,
+/// less the radius, from the surface.
 /// False for other shapes, a non-finite path, or a path the bound cannot tell.
-fn clear_of_sphere(o: &Obstacle, x0: Vec3, x1: Vec3, t0: f64, h: f64, stop: f64) -> bool {
+fn clear_of_sphere(
+    o: &Obstacle,
+    x0: Vec3,
+    x1: Vec3,
+    t0: f64,
+    h: f64,
+    stop: f64,
+    speed: f64,
+) -> bool {
     let Shape::Sphere(sphere) = &o.collider.shape else {
         return false;
     };
-    let (speed, _) = o.collider.speed_bound(t0, t0 + h);
     let c = o.collider.transform_point(sphere.center, t0);
     let (p, d) = (x0 - c, x1 - x0);
     let dd = d.dot(d);
@@ -128,12 +141,13 @@ mod tests {
 
     /// The advancement alone, with `sweep`'s rate.
     fn advanced(o: &Obstacle, x0: Vec3, x1: Vec3, t0: f64, h: f64, stop: f64) -> Option<f64> {
-        let col = &o.collider;
-        let len = (x1 - x0).length();
-        let c = col.center();
-        let (speed, spin) = col.speed_bound(t0, t0 + h);
-        let reach = (x0 - c).length().max((x1 - c).length()) + len + speed * h;
-        advance(o, x0, x1, t0, h, stop, len + h * (speed + spin * reach))
+        let (speed, spin) = o.collider.speed_bound(t0, t0 + h);
+        advance(o, x0, x1, t0, h, stop, rate(o, x0, x1, h, speed, spin))
+    }
+
+    /// [`clear_of_sphere`] with the obstacle's speed bound over the step, as `sweep` calls it.
+    fn clear(o: &Obstacle, x0: Vec3, x1: Vec3, t0: f64, h: f64, stop: f64) -> bool {
+        clear_of_sphere(o, x0, x1, t0, h, stop, o.collider.speed_bound(t0, t0 + h).0)
     }
 
     fn vec3(r: f64) -> impl Strategy<Value = Vec3> {
@@ -164,7 +178,7 @@ mod tests {
             let x0 = c0 + n * (radius + stop + gap);
             let x1 = x0 + path;
             let want = advanced(&o, x0, x1, t0, h, stop);
-            if clear_of_sphere(&o, x0, x1, t0, h, stop) {
+            if clear(&o, x0, x1, t0, h, stop) {
                 prop_assert_eq!(want, None);
             }
             prop_assert_eq!(sweep(&o, x0, x1, t0, h, stop), want);
@@ -182,11 +196,11 @@ mod tests {
         let r = 0.502;
         let x0 = Vec3::new(r, 0.0, 0.0);
         let x1 = Vec3::new(r * (w * h).cos(), 0.0, -r * (w * h).sin());
-        assert!(clear_of_sphere(&o, x0, x1, 0.0, h, stop));
+        assert!(clear(&o, x0, x1, 0.0, h, stop));
         assert_eq!(sweep(&o, x0, x1, 0.0, h, stop), None);
         // and one path that does hit is not
         let into = Vec3::new(0.49, 0.0, 0.0);
-        assert!(!clear_of_sphere(&o, x0, into, 0.0, h, stop));
+        assert!(!clear(&o, x0, into, 0.0, h, stop));
         assert!(sweep(&o, x0, into, 0.0, h, stop).is_some());
     }
 }
