@@ -229,7 +229,8 @@ impl Simulation {
         work.dv.resize(n, Vec3::ZERO);
         let (mut x, mut v) = (start.x0.clone(), start.v0.clone());
         let mut active = ActiveSet::new(contacts.obstacle.clone());
-        // where obstacle contact begins, the step is solved to at least FIRST_CONTACT_TOLERANCE
+        // where obstacle contact begins (no candidate had a normal force in the previous step),
+        // the step is solved to FIRST_CONTACT_TOLERANCE or tighter
         let candidates = &contacts.obstacle;
         let first_contact = !candidates.is_empty()
             && (candidates.iter()).all(|c| self.normal_force[c.particle as usize] == 0.0);
