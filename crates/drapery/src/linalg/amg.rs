@@ -3,9 +3,10 @@
 //!
 //! It works on the matrix graph alone, so any cloth mesh will do:
 //!
-//! * **Filtered operator.** Level 0 is `Â = S A S + (I - S)` (as in [`super::direct`]):
-//!   symmetric positive definite when `A` is, equal to `A` on the free subspace, with the
-//!   constrained directions decoupled.
+//! * **Filtered operator.** Level 0 is `Â = S A S + D_c (I - S)`: symmetric positive definite
+//!   when `A` is, equal to `A` on the free subspace, with the constrained directions decoupled
+//!   and scaled by a tenth of their particle's mean diagonal entry (`numeric::constrained_scale`;
+//!   [`super::direct`] uses `c = 1`, which changes nothing there but made the cycle worse).
 //! * **Aggregation** ([`setup`]). Block `(i, j)` is strong when
 //!   `‖A_ij‖_F ≥ θ_l √(‖A_ii‖_F ‖A_jj‖_F)` (`θ_l = θ / 2^l`). Particles are grouped greedily
 //!   into aggregates of a root and its strong neighbours; particles with no strong neighbour
@@ -346,7 +347,7 @@ impl Multigrid {
         cycle::apply(self, s, r, out)
     }
 
-    /// `y = Â x` with the finest level's filtered matrix `Â = S A S + (I - S)` (see the module
+    /// `y = Â x` with the finest level's filtered matrix `Â = S A S + D_c (I - S)` (see the module
     /// docs); returns `xᵀ y`. For `x` in the free subspace (`S x = x`) this is `S A x`, the
     /// product PCG needs, at about half the bytes of [`BlockMatrix::mul_vec`]. Call
     /// [`Multigrid::refresh`] first; the filter is the one given there.

@@ -526,3 +526,40 @@ fn with_few_contacts_changed_the_kept_coarse_levels_cost_few_iterations() {
         full.iterations
     );
 }
+
+#[test]
+fn the_filtered_product_is_s_a_x_on_the_free_subspace_whatever_the_constrained_scale() {
+    let (a, s, mut mg) = hierarchy(24, 5, |_| {});
+    let n = a.n();
+    let mut rng = Rng(11);
+    // x in the free subspace
+    let x: Vec<Vec3> = (0..n).map(|i| s[i] * rng.vec3()).collect();
+    let mut y = vec![Vec3::ZERO; n];
+    let xy = mg.filtered_product(&x, &mut y);
+    let mut ax = vec![Vec3::ZERO; n];
+    a.mul_vec(&x, &mut ax);
+    let scale = ax.iter().fold(0.0f64, |m, v| m.max(v.length()));
+    for i in 0..n {
+        assert!((y[i] - s[i] * ax[i]).length() <= 1e-12 * scale, "row {i}");
+    }
+    assert!((xy - dot(&x, &y)).abs() <= 1e-12 * dot(&x, &y).abs());
+    // a constrained direction of a held particle weighs a tenth of its mean diagonal entry,
+    // not 1 (the cloth's diagonal entries are far from 1)
+    let held = n / 2;
+    let nrm = Vec3::new(0.0, 1.0, 0.5).normalize();
+    assert!(
+        (s[held] * nrm).length() < 1e-12,
+        "particle {held} is held along nrm"
+    );
+    let d = a.values[a.diag_index(held)];
+    let c = 0.1 * (d.x_axis.x + d.y_axis.y + d.z_axis.z) / 3.0;
+    assert!((c - 1.0).abs() > 0.5, "the test needs c far from 1: {c}");
+    let mut e = vec![Vec3::ZERO; n];
+    e[held] = nrm;
+    mg.filtered_product(&e, &mut y);
+    assert!(
+        (y[held] - c * nrm).length() <= 1e-12 * c,
+        "{:?} against {c}",
+        y[held]
+    );
+}
