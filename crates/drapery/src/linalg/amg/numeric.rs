@@ -42,8 +42,8 @@ pub(super) fn refresh_fine(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3]) {
     }
 }
 
-/// `out = S A S + D_c (I - S)` (see [`constrained_scale`]) block by block (`out` has the pattern of `a`), and its upper
-/// triangle into `upper` in the same pass.
+/// `out = S A S + D_c (I - S)` (see [`constrained_scale`]) block by block (`out` has the
+/// pattern of `a`), and its upper triangle into `upper` in the same pass.
 pub(super) fn filter_matrix(
     a: &BlockMatrix,
     s: &[Mat3],
@@ -100,13 +100,14 @@ pub(super) fn filter_matrix(
 }
 
 /// The scale `c` of a held particle's constrained directions in the finest level's
-/// `Â = S A S + c (I - S)` (a pinned particle's is 1: its row is decoupled, so `c` would change
-/// only the smoother's power estimate): a tenth of the mean diagonal entry of its unfiltered block
-/// `A_ii` (docs/MATH.md §14). PCG's products and solution do not depend on `c`, only the
-/// cycle does: with `c` = 1 the constrained directions of a held particle weigh grams against
-/// its free ones' stiffness, and the aggregates and the smoothed prolongator that mix them
-/// then approximate the free motion worse (the Cusick test took 205 CG iterations per step
-/// against 137 with a tenth, BENCHMARKS.md, sixteenth session).
+/// `Â = S A S + c (I - S)`: a tenth of the mean diagonal entry of its unfiltered block `A_ii`
+/// (docs/MATH.md §12). A pinned particle's is 1: its row is decoupled, so `c` would change only
+/// the smoother's power estimate. PCG's products and solution do not depend on `c`, only the
+/// cycle does: with `c = 1` a held particle's constrained directions weigh 1 whatever its free
+/// ones weigh (mass plus `h²` times stiffness, far from 1 for cloth), and the aggregates and
+/// the smoothed prolongator that mix them approximate the free motion worse (the Cusick test
+/// took 205 CG iterations per step against 137 with a tenth, BENCHMARKS.md, eighteenth
+/// session).
 fn constrained_scale(a_ii: &Mat3) -> f64 {
     let c = 0.1 * (a_ii.x_axis.x + a_ii.y_axis.y + a_ii.z_axis.z) / 3.0;
     if c > 0.0 && c.is_finite() { c } else { 1.0 }
