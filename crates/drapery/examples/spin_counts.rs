@@ -8,8 +8,8 @@
 //! `free`, of the same cloth without collisions, `spin-free-N`), printing each step's counts
 //! and their sums, then each stage's mean ms per step over the steps after the first (the
 //! first after a restore also builds the collision trees and the multigrid's structure from
-//! scratch) and their total. Under `valgrind --tool=callgrind` (with `RAYON_NUM_THREADS=1`) the second
-//! form counts the instructions of STEPS steps from the same state (building the model and
+//! scratch) and their total. Under `valgrind --tool=callgrind` (with `RAYON_NUM_THREADS=1`)
+//! the second form counts the instructions of STEPS steps from the same state (building the model and
 //! reading FILE are the rest: subtract a run of 0 steps).
 //!
 //! `... -- N trace STEPS FILE` restores FILE (or, with `-` for FILE, starts from the scene's
@@ -313,13 +313,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .map(|&s| format!("{:.1}", s as f64 / count as f64))
                 .collect();
             println!("mean {}", m.join(" "));
-            let timed = if count > 1 { count - 1 } else { count };
+            let (timed, which) = match count {
+                0 | 1 => (1, "step 1".to_string()),
+                _ => (count - 1, format!("steps 2-{count}")),
+            };
             let ms: Vec<String> = (drapery::StageTimes::NAMES.iter().zip(times.fields()))
                 .map(|(name, s)| format!("{name} {:.2}", 1e3 * s / timed as f64))
                 .collect();
             let total: f64 = times.fields().into_iter().sum();
             println!(
-                "ms/step (steps 2-{count}) {} total {:.2}",
+                "ms/step ({which}) {} total {:.2}",
                 ms.join(" "),
                 1e3 * total / timed as f64
             );
