@@ -347,9 +347,9 @@ impl Multigrid {
         cycle::apply(self, s, r, out)
     }
 
-    /// `y = Â x` with the finest level's filtered matrix `Â = S A S + D_c (I - S)` (see the module
-    /// docs); returns `xᵀ y`. For `x` in the free subspace (`S x = x`) this is `S A x`, the
-    /// product PCG needs, at about half the bytes of [`BlockMatrix::mul_vec`]. Call
+    /// `y = Â x` with the finest level's filtered matrix `Â = S A S + D_c (I - S)` (see the
+    /// module docs); returns `xᵀ y`. For `x` in the free subspace (`S x = x`) this is `S A x`,
+    /// the product PCG needs, at about half the bytes of [`BlockMatrix::mul_vec`]. Call
     /// [`Multigrid::refresh`] first; the filter is the one given there.
     pub fn filtered_product(&mut self, x: &[Vec3], y: &mut [Vec3]) -> f64 {
         let fine = &mut self.levels[0];

@@ -14,10 +14,10 @@ pub enum LinearSolver {
 }
 
 /// The PCG tolerance, at most, of a step in which obstacle contact begins: it has contact
-/// candidates and none of them had a normal force in the previous step. What the cloth does after such a first
-/// contact depends on that step's solve to about this accuracy: a pile dropped at 1e-3 did a
-/// ninth of the self-contact work of the exact solve, and at 1e-6 the same (docs/ROUNDING.md,
-/// seventeenth session). Later steps keep `tolerance`.
+/// candidates and none of them had a normal force in the previous step. What the cloth does
+/// after such a first contact depends on that step's solve to about this accuracy: a pile
+/// dropped at 1e-3 did a ninth of the self-contact work of the exact solve, and at 1e-6 the
+/// same (docs/ROUNDING.md, seventeenth session). Later steps keep `tolerance`.
 pub const FIRST_CONTACT_TOLERANCE: f64 = 1e-6;
 
 /// Tunables of the time step.
