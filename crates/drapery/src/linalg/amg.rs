@@ -24,6 +24,9 @@
 //! * **Cycle** ([`cycle`]). A W-cycle on large levels and a V-cycle below, with the same number
 //!   of damped block-Jacobi sweeps before and after the coarse correction, so it is a symmetric
 //!   positive definite operator and CG stays valid.
+//! * **Couplings outside the pattern** ([`couplings`]). When PCG's matrix is `P + C` with the
+//!   hierarchy built from `P` ([`super::split`]), the cycle's products on every level but the
+//!   coarsest add `C`, carried down by Galerkin products ([`Multigrid::set_couplings`]).
 //!
 //! The structure (aggregates, patterns of `P`, `A P` and `A_c`, and the position of every
 //! product term) is built once per matrix pattern. With the default strength threshold 0 it
@@ -34,11 +37,13 @@
 //! with a fixed order within a row, and the reductions are maxima or sums over chunks fixed by
 //! the size, added in order, so the result is the same bits on any number of threads.
 
+mod couplings;
 mod cycle;
 mod numeric;
 mod setup;
 
 use super::bsr::BlockMatrix;
+use super::split::Coupling;
 use super::sym::SymBlockMatrix;
 use crate::math::{Mat3, Vec3};
 
@@ -242,6 +247,9 @@ pub struct Multigrid {
     reference: Option<(BlockMatrix, Vec<Mat3>)>,
     /// Chunk sums of [`Multigrid::apply`].
     partial: Vec<f64>,
+    /// The couplings outside the pattern on each level but the coarsest, finest first
+    /// ([`Multigrid::set_couplings`]).
+    couplings: Vec<couplings::Rows>,
 }
 
 impl Multigrid {
@@ -338,6 +346,34 @@ impl Multigrid {
     /// Whether a reference is set.
     pub fn has_reference(&self) -> bool {
         self.reference.is_some()
+    }
+
+    /// Makes the cycle's products those of `P + C` (`P` the matrix of the last refresh, `C`
+    /// the couplings outside its pattern, filtered by `s`, the filter of that refresh) on every
+    /// level but the coarsest, `C` carried down by Galerkin products ([`couplings`],
+    /// docs/MATH.md §12); `None` removes them. Call after each refresh: the coarse levels'
+    /// couplings depend on the prolongators.
+    pub fn set_couplings(&mut self, c: Option<&Coupling>, s: &[Mat3]) {
+        self.couplings.clear();
+        let (Some(c), Some(last)) = (c, self.levels.len().checked_sub(1)) else {
+            return;
+        };
+        // every level but the coarsest, which keeps the factor of its matrix alone
+        let mut rows = couplings::Rows::fine(c, s);
+        for l in 0..last {
+            let next = match l + 1 < last {
+                true => {
+                    let t = self.levels[l].transfer.as_ref().expect("a transfer");
+                    Some(rows.galerkin(t, self.levels[l + 1].a.n()))
+                }
+                false => None,
+            };
+            self.couplings.push(rows);
+            let Some(next) = next else {
+                break;
+            };
+            rows = next;
+        }
     }
 
     /// `out = S V(r)`, one V-cycle applied to `r` (which should already be filtered), then

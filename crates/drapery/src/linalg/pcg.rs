@@ -150,8 +150,9 @@ pub fn solve_split(
         prepare(p, s, settings, w, &mut stats);
         prepared = true;
     }
-    // Reference residual: the zero guess on the free part.
-    a.mul_vec(z, &mut w.q);
+    // Reference residual: the zero guess on the free part (z is zero but on constrained
+    // particles).
+    a.mul_sparse_vec(z, &mut w.q);
     for i in 0..n {
         w.r[i] = s[i] * (b[i] - w.q[i]);
     }
@@ -254,6 +255,10 @@ fn iterate(
     rnorm: &mut f64,
 ) {
     let multigrid = settings.preconditioner == Preconditioner::Multigrid;
+    if multigrid {
+        // the cycle's products add the couplings outside the multigrid's pattern
+        w.amg.set_couplings(a.coupling, s);
+    }
     let mut delta = precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.c);
     while stats.iterations < settings.max_iterations {
         if *rnorm <= target {

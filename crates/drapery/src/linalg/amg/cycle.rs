@@ -10,7 +10,11 @@
 //! positive definite because the damping keeps `ω ρ(D⁻¹A) < 2`, which makes every cycle a
 //! convergent iteration, and `γ` steps of a convergent iteration with a symmetric positive
 //! definite operator `B` give the symmetric positive definite `I - (I - B A)^γ` times `A⁻¹`.
+//! Where there are couplings outside the pattern ([`super::couplings`]), a level's products
+//! (residuals and sweeps) add them; its smoother and the levels below stay those of the
+//! majorant, which keeps each level's cycle convergent (docs/MATH.md §12).
 
+use super::couplings::Rows;
 use super::{AmgParams, CoarseSolver, Level, Multigrid};
 use crate::linalg::block::add_products;
 use crate::linalg::vector::chunked_sum;
@@ -32,7 +36,7 @@ fn min_len(n: usize) -> usize {
 pub(super) fn apply(mg: &mut Multigrid, s: &[Mat3], r: &[Vec3], out: &mut [Vec3]) -> f64 {
     let fine = &mut mg.levels[0];
     fine.b.copy_from_slice(r);
-    cycle(&mut mg.levels, &mg.coarse, &mg.params);
+    cycle(&mut mg.levels, &mg.coarse, &mg.params, &mg.couplings);
     let x = &mg.levels[0].x;
     chunked_sum(out, &mut mg.partial, |first, out| {
         let mut acc = 0.0;
@@ -45,27 +49,36 @@ pub(super) fn apply(mg: &mut Multigrid, s: &[Mat3], r: &[Vec3], out: &mut [Vec3]
     })
 }
 
-/// One cycle from `levels[0]` down: reads `levels[0].b`, writes `levels[0].x`.
-fn cycle(levels: &mut [Level], coarse: &CoarseSolver, params: &AmgParams) {
+/// One cycle from `levels[0]` down: reads `levels[0].b`, writes `levels[0].x`. `couplings`:
+/// those of `levels[0]`, `levels[1]`, ... (as many as there are, possibly none), added to the
+/// levels' products ([`super::couplings`]).
+fn cycle(levels: &mut [Level], coarse: &CoarseSolver, params: &AmgParams, couplings: &[Rows]) {
     let sweeps = params.sweeps;
+    let (own, below) = match couplings.split_first() {
+        Some((c, rest)) => (Some(c), rest),
+        None => (None, couplings),
+    };
     let (lvl, rest) = levels.split_first_mut().expect("a level");
     // moved out for the duration of the cycle so that the level's vectors can be borrowed
     let Some(t) = lvl.transfer.take() else {
         if let Some(l) = &coarse.l {
             cholesky_solve(l, coarse.dim, &lvl.b, &mut lvl.x);
         } else {
-            smooth(lvl, 2 * sweeps.max(1));
+            smooth(lvl, 2 * sweeps.max(1), own);
         }
         return;
     };
     let next = &mut rest[0];
-    smooth(lvl, sweeps);
+    smooth(lvl, sweeps, own);
     // w = b - A x
     let (x, b) = (&lvl.x, &lvl.b);
     let rows = min_len(lvl.a.n());
     lvl.sym.mul_then(x, &mut lvl.w, &mut lvl.partial, |i, ax| {
         (b[i] - ax, [0.0; 2])
     });
+    if let Some(c) = own {
+        c.subtract_product(&lvl.x, &mut lvl.w);
+    }
     // b_c = Pᵀ w
     let w = &lvl.w;
     next.b
@@ -76,7 +89,7 @@ fn cycle(levels: &mut [Level], coarse: &CoarseSolver, params: &AmgParams) {
             let e = t.pt_ptr[c] as usize..t.pt_ptr[c + 1] as usize;
             *bc = add_products(Vec3::ZERO, &t.pt[e.clone()], &t.pt_row[e], w);
         });
-    cycle(rest, coarse, params);
+    cycle(rest, coarse, params, below);
     // more cycles from the residual each leaves (the coarsest level's solve is exact)
     let repeat = rest.len() > 1 && rest[0].a.n() >= params.repeat_rows;
     let gamma = if repeat {
@@ -91,13 +104,16 @@ fn cycle(levels: &mut [Level], coarse: &CoarseSolver, params: &AmgParams) {
         let (x, b) = (&c.x, &c.b);
         c.sym
             .mul_then(x, &mut c.w, &mut c.partial, |i, ax| (b[i] - ax, [0.0; 2]));
+        if let Some(cc) = below.first() {
+            cc.subtract_product(&c.x, &mut c.w);
+        }
         std::mem::swap(&mut c.b, &mut c.w);
         if k == 1 {
             std::mem::swap(&mut c.x, &mut c.y);
         } else {
             add_to(&mut c.y, &c.x);
         }
-        cycle(rest, coarse, params);
+        cycle(rest, coarse, params, below);
     }
     if gamma > 1 {
         let c = &mut rest[0];
@@ -114,7 +130,7 @@ fn cycle(levels: &mut [Level], coarse: &CoarseSolver, params: &AmgParams) {
             *xi = add_products(*xi, &t.p[r.clone()], &t.p_col[r], xc);
         });
     lvl.transfer = Some(t);
-    smooth_more(lvl, sweeps);
+    smooth_more(lvl, sweeps, own);
 }
 
 /// `x += y`.
@@ -125,8 +141,8 @@ fn add_to(x: &mut [Vec3], y: &[Vec3]) {
         .for_each(|(x, y)| *x += *y);
 }
 
-/// `sweeps` damped block-Jacobi sweeps from `x = 0`.
-fn smooth(lvl: &mut Level, sweeps: usize) {
+/// `sweeps` damped block-Jacobi sweeps from `x = 0` (of the level's matrix plus `couplings`).
+fn smooth(lvl: &mut Level, sweeps: usize, couplings: Option<&Rows>) {
     if sweeps == 0 {
         lvl.x.iter_mut().for_each(|v| *v = Vec3::ZERO);
         return;
@@ -137,17 +153,22 @@ fn smooth(lvl: &mut Level, sweeps: usize) {
         .enumerate()
         .with_min_len(min_len(b.len()).max(1024))
         .for_each(|(i, xi)| *xi = omega * (dinv[i] * b[i]));
-    smooth_more(lvl, sweeps - 1);
+    smooth_more(lvl, sweeps - 1, couplings);
 }
 
-/// `sweeps` damped block-Jacobi sweeps `x ← x + ω D⁻¹ (b - A x)` from the current `x`.
-fn smooth_more(lvl: &mut Level, sweeps: usize) {
+/// `sweeps` damped block-Jacobi sweeps `x ← x + ω D⁻¹ (b - A x)` from the current `x`, `A`
+/// the level's matrix plus `couplings`.
+fn smooth_more(lvl: &mut Level, sweeps: usize, couplings: Option<&Rows>) {
     for _ in 0..sweeps {
         let (x, b, dinv, omega) = (&lvl.x, &lvl.b, &lvl.dinv, lvl.omega);
         lvl.sym.mul_then(x, &mut lvl.w, &mut lvl.partial, |i, ax| {
             (x[i] + omega * (dinv[i] * (b[i] - ax)), [0.0; 2])
         });
         std::mem::swap(&mut lvl.x, &mut lvl.w);
+        if let Some(c) = couplings {
+            // `w` holds the sweep's starting point
+            c.sweep_correction(&lvl.w, &mut lvl.x, &lvl.dinv, lvl.omega);
+        }
     }
 }
 

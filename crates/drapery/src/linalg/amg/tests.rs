@@ -563,3 +563,214 @@ fn the_filtered_product_is_s_a_x_on_the_free_subspace_whatever_the_constrained_s
         y[held]
     );
 }
+
+/// A hanging `side²` cloth's matrix after 3 steps as `P + C`, as if folded in half across
+/// its rows with the two layers pressed together over a band: `C` couples particle `(x, y)`
+/// with `(x, side − 1 − y)` for `y` in `band` (pairs far apart in the mesh, none in `P`'s
+/// pattern) as contacts of stiffness `k` along `z` (`k zzᵀ` on both diagonals, `−k zzᵀ`
+/// between), with its majorant moved into `P` as a step does (`P ≥ P + C`); and
+/// [`mixed_filter`].
+fn contact_split(
+    side: usize,
+    band: std::ops::Range<usize>,
+    k: f64,
+) -> (BlockMatrix, Coupling, Vec<Mat3>) {
+    let mut p = cloth_matrix(side, 3);
+    let n = p.n();
+    let list: Vec<(u32, u32)> = band
+        .flat_map(|y| {
+            (0..side).map(move |x| ((y * side + x) as u32, ((side - 1 - y) * side + x) as u32))
+        })
+        .collect();
+    assert!(
+        list.iter()
+            .all(|&(i, j)| p.find(i as usize, j as usize).is_none())
+    );
+    let mut c = Coupling::new(n, &list);
+    let h = outer(Vec3::Z, Vec3::Z) * k;
+    for &(i, j) in &list {
+        let m = c.matrix_mut();
+        m.add(i as usize, i as usize, h);
+        m.add(j as usize, j as usize, h);
+        m.add(i as usize, j as usize, -h);
+        m.add(j as usize, i as usize, -h);
+    }
+    c.move_majorant_into(&mut p);
+    let s = mixed_filter(n, side);
+    (p, c, s)
+}
+
+#[test]
+fn the_couplings_of_each_level_are_the_galerkin_products_of_the_finer_ones() {
+    let (p, c, s) = contact_split(32, 6..14, 1.0);
+    let mut mg = Multigrid::default();
+    mg.refresh(&p, &s);
+    mg.set_couplings(Some(&c), &s);
+    assert!(mg.couplings.len() >= 2, "{}", mg.couplings.len());
+    // the finest: S C S
+    let n = p.n();
+    let cd = c.matrix().to_dense();
+    let got = mg.couplings[0].to_dense(n);
+    let scale = cd.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    for i in 0..n {
+        for j in 0..n {
+            let want = s[i]
+                * c.matrix()
+                    .find(i, j)
+                    .map_or(Mat3::ZERO, |k| c.matrix().values[k])
+                * s[j];
+            for a in 0..3 {
+                for b in 0..3 {
+                    let g = got[3 * i + a][3 * j + b];
+                    assert!((g - want.col(b)[a]).abs() <= 1e-15 * scale, "{g} vs {want}");
+                }
+            }
+        }
+    }
+    // each coarser: Pᵀ Ĉ P
+    for l in 0..mg.couplings.len() - 1 {
+        let (nf, nc) = (mg.levels[l].a.n(), mg.levels[l + 1].a.n());
+        let pd = dense_p(mg.levels[l].transfer.as_ref().unwrap(), nf, nc);
+        let fine = mg.couplings[l].to_dense(nf);
+        let got = mg.couplings[l + 1].to_dense(nc);
+        // Ĉ P, then Pᵀ (Ĉ P), over the nonzero entries
+        let mut cp = vec![vec![0.0; 3 * nc]; 3 * nf];
+        for (i, row) in fine.iter().enumerate() {
+            for (k, &f) in row.iter().enumerate().filter(|(_, f)| **f != 0.0) {
+                for (b, &p) in pd[k].iter().enumerate() {
+                    cp[i][b] += f * p;
+                }
+            }
+        }
+        let mut want = vec![vec![0.0; 3 * nc]; 3 * nc];
+        for (k, prow) in pd.iter().enumerate() {
+            for (a, &p) in prow.iter().enumerate().filter(|(_, p)| **p != 0.0) {
+                for (b, &m) in cp[k].iter().enumerate() {
+                    want[a][b] += p * m;
+                }
+            }
+        }
+        let scale = fine.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(scale > 0.0);
+        for (gr, wr) in got.iter().zip(&want) {
+            for (g, w) in gr.iter().zip(wr) {
+                assert!(
+                    (g - w).abs() <= 1e-12 * scale,
+                    "level {}: {g} vs {w}",
+                    l + 1
+                );
+            }
+        }
+    }
+    // every level but the coarsest, which keeps its factor of P
+    assert_eq!(mg.couplings.len(), mg.level_count() - 1);
+}
+
+#[test]
+fn the_w_cycle_with_couplings_is_symmetric_and_positive_definite() {
+    let (p, c, s) = contact_split(32, 6..14, 50.0);
+    let mut mg = Multigrid::default();
+    mg.params.repeat_rows = 0;
+    mg.refresh(&p, &s);
+    mg.set_couplings(Some(&c), &s);
+    assert!(mg.couplings.len() >= 2);
+    assert_symmetric_positive_definite(&mut mg, &s, &mut Rng(8));
+}
+
+/// Iterations of PCG, preconditioned by the cycle of `mg` as it is, to reduce the residual
+/// of `A x = b` (`A = P + C` filtered by `s`, `b` random and filtered) by `tol`.
+fn cg_iterations(p: &BlockMatrix, c: &Coupling, s: &[Mat3], mg: &mut Multigrid, tol: f64) -> usize {
+    let a = crate::linalg::split::Split {
+        p,
+        coupling: Some(c),
+    };
+    let n = p.n();
+    let filt = |v: &[Vec3]| -> Vec<Vec3> { v.iter().zip(s).map(|(x, m)| *m * *x).collect() };
+    let product = |x: &[Vec3]| -> Vec<Vec3> {
+        let mut y = vec![Vec3::ZERO; n];
+        a.mul_vec(&filt(x), &mut y);
+        filt(&y)
+    };
+    let mut r = filt(&Rng(31).vecs(n));
+    let r0 = dot(&r, &r).sqrt();
+    let mut z = vec![Vec3::ZERO; n];
+    let mut delta = mg.apply(s, &r, &mut z);
+    let mut d = z.clone();
+    for k in 0..1000 {
+        if dot(&r, &r).sqrt() <= tol * r0 {
+            return k;
+        }
+        let q = product(&d);
+        let alpha = delta / dot(&d, &q);
+        r.iter_mut().zip(&q).for_each(|(r, q)| *r -= alpha * *q);
+        let new = mg.apply(s, &r, &mut z);
+        d.iter_mut()
+            .zip(&z)
+            .for_each(|(d, z)| *d = *z + (new / delta) * *d);
+        delta = new;
+    }
+    panic!("PCG did not converge");
+}
+
+#[test]
+fn with_the_couplings_pcg_takes_fewer_iterations_where_layers_press_together() {
+    // one row of contacts, and eight rows soft and stiff (against diagonal blocks of about 1:
+    // mass 1e-4 kg plus h² times the springs)
+    for (band, k) in [(6..7, 1.0), (6..14, 0.01), (6..14, 1.0)] {
+        let (p, c, s) = contact_split(32, band.clone(), k);
+        let mut mg = Multigrid::default();
+        mg.refresh(&p, &s);
+        mg.set_couplings(None, &s);
+        let without = cg_iterations(&p, &c, &s, &mut mg, 1e-8);
+        mg.set_couplings(Some(&c), &s);
+        let with = cg_iterations(&p, &c, &s, &mut mg, 1e-8);
+        eprintln!(
+            "rows {band:?}, k = {k}: {with} CG iterations with the couplings, {without} without"
+        );
+        assert!(with < without, "{with} vs {without}");
+    }
+}
+
+#[test]
+fn pcg_with_couplings_agrees_with_the_direct_solve_and_with_itself_on_two_threads() {
+    let (p, c, s) = contact_split(24, 4..10, 100.0);
+    let a = crate::linalg::split::Split {
+        p: &p,
+        coupling: Some(&c),
+    };
+    let n = p.n();
+    let mut rng = Rng(12);
+    let b = rng.vecs(n);
+    let z: Vec<Vec3> = (0..n)
+        .map(|i| (Mat3::IDENTITY - s[i]) * rng.vec3())
+        .collect();
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let mut x = vec![Vec3::ZERO; n];
+                let st = pcg::solve_split(
+                    a,
+                    &b,
+                    &s,
+                    &z,
+                    &mut x,
+                    &settings(Preconditioner::Multigrid, 1e-12),
+                    &mut PcgScratch::default(),
+                );
+                assert!(st.converged, "{st:?} {threads}");
+                x
+            })
+    };
+    let (x1, x2) = (run(1), run(2));
+    assert_eq!(x1, x2);
+    let mut direct = DirectSolver::default();
+    let mut y = vec![Vec3::ZERO; n];
+    direct.solve(&a.merged(), &b, &s, &z, &mut y, true).unwrap();
+    let scale = y.iter().fold(0.0f64, |m, v| m.max(v.abs().max_element()));
+    for (u, v) in x1.iter().zip(&y) {
+        assert!((*u - *v).abs().max_element() <= 1e-8 * scale, "{u} vs {v}");
+    }
+}
