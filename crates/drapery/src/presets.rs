@@ -552,6 +552,20 @@ mod tests {
         counts[10..].iter().sum::<usize>() as f64
     }
 
+    /// docs/MATH.md §11, impacts: at a loose tolerance the pile's landing is solved to 1e-6
+    /// twice. Step 9 is its first contact; step 10 is not (step 9 left contacts held), but more
+    /// of the cloth hits the ground in it.
+    #[test]
+    fn the_pile_s_landing_steps_are_solved_tight_at_a_loose_tolerance() {
+        let mut sim = Preset::Pile.simulation(64, 1e-3).unwrap();
+        let reports: Vec<_> = (0..11).map(|_| sim.step(1.0 / 60.0).unwrap()).collect();
+        assert!(reports[..9].iter().all(|r| r.obstacle_contacts == 0));
+        assert!(reports[9].obstacle_contacts > 0);
+        for r in &reports[9..] {
+            assert!(r.residual <= 1e-6, "{}", r.residual);
+        }
+    }
+
     /// docs/ROUNDING.md, seventeenth session: at the scenes' default PCG tolerance (1e-6) the
     /// pile's first ground contact does the contact work of the exact linear solve. Over steps
     /// 10 to 14 (the contact and the crumpling after it) the direct solver makes 563, 872, 823,

@@ -102,6 +102,31 @@ pub fn find(
     per.into_iter().flatten().collect()
 }
 
+/// Twice the kinetic energy of the candidates' approach: `Σ m_i (u_i − n_i·v_i − slack)₊²`
+/// over the candidates, where `u_i` is the normal velocity the contact prescribes and `slack`
+/// a speed the approach may have without counting (use `|g| h`: a particle resting on an
+/// obstacle gains that much toward it every step). Summed in candidate order.
+pub fn impact_energy(candidates: &[ObstacleContact], v: &[Vec3], mass: &[f64], slack: f64) -> f64 {
+    candidates
+        .iter()
+        .map(|c| {
+            let i = c.particle as usize;
+            mass[i]
+                * (c.normal_velocity - c.normal.dot(v[i]) - slack)
+                    .max(0.0)
+                    .powi(2)
+        })
+        .sum()
+}
+
+/// Twice the kinetic energy of particles of masses `mass` at velocities `v`, summed in order.
+pub fn kinetic_energy(v: &[Vec3], mass: &[f64]) -> f64 {
+    v.iter()
+        .zip(mass)
+        .map(|(v, m)| m * v.length_squared())
+        .sum()
+}
+
 /// Which candidate contacts are held, and the normal impulse each one's constraint exerted in
 /// the last solve.
 #[derive(Clone, Debug, Default)]
@@ -265,6 +290,33 @@ mod tests {
             assert!((x[i].y + h * ct.normal_velocity - thickness).abs() < 1e-15);
             assert_eq!((ct.normal, ct.friction), (Vec3::Y, 0.5));
         }
+    }
+
+    #[test]
+    fn only_the_approach_beyond_one_step_of_gravity_counts_as_impact() {
+        let (thickness, h, g) = (0.01, 0.01, 9.81);
+        let x = [
+            Vec3::new(0.0, 0.01, 0.0), // resting at the thickness, gravity's one step of speed
+            Vec3::new(0.0, 0.012, 0.0), // falling at 2 m/s
+            Vec3::new(0.0, 0.0105, 0.0), // sliding along the ground
+        ];
+        let v = [
+            Vec3::new(0.0, -g * h, 0.0),
+            Vec3::new(0.3, -2.0, 0.0),
+            Vec3::new(1.0, -0.0, 0.0),
+        ];
+        let mass = [0.5, 0.25, 2.0];
+        let c = find(&x, &v, &[false; 3], &[ground()], 0.0, h, thickness, g * h);
+        assert_eq!(c.len(), 3);
+        // the falling particle must reach u = (thickness - y)/h = -0.2 m/s from -2 m/s: of that
+        // 1.8 m/s approach, all but g h counts
+        let e = impact_energy(&c, &v, &mass, g * h);
+        let want = 0.25 * (1.8 - g * h) * (1.8 - g * h);
+        assert!((e - want).abs() < 1e-12 * want, "{e} {want}");
+        assert_eq!(impact_energy(&c[..1], &v, &mass, g * h), 0.0);
+        assert_eq!(impact_energy(&c[2..], &v, &mass, g * h), 0.0);
+        let k = 0.5 * g * g * h * h + 0.25 * (0.09 + 4.0) + 2.0;
+        assert!((kinetic_energy(&v, &mass) - k).abs() < 1e-12 * k);
     }
 
     #[test]

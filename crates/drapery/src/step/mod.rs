@@ -39,13 +39,13 @@ pub mod tangles;
 mod testing;
 
 pub use report::{StageTimes, StepReport};
-pub use settings::{FIRST_CONTACT_TOLERANCE, LinearSolver, SolverSettings};
+pub use settings::{FIRST_CONTACT_TOLERANCE, IMPACT_SHARE, LinearSolver, SolverSettings};
 pub use tangles::Tangled;
 
 use crate::collision::broad_phase::Candidates;
 use crate::collision::bvh::TreeCache;
 use crate::collision::seams::Seams;
-use crate::constraints::obstacle::ActiveSet;
+use crate::constraints::obstacle::{self, ActiveSet};
 use crate::constraints::strain_limit::StrainLimits;
 use crate::error::Result;
 use crate::forces::{
@@ -229,19 +229,24 @@ impl Simulation {
         work.dv.resize(n, Vec3::ZERO);
         let (mut x, mut v) = (start.x0.clone(), start.v0.clone());
         let mut active = ActiveSet::new(contacts.obstacle.clone());
-        // where obstacle contact begins (no candidate had a normal force in the previous step),
-        // the step is solved to FIRST_CONTACT_TOLERANCE or tighter
+        // where obstacle contact begins (no candidate had a normal force in the previous step)
+        // and at an impact, the step is solved to FIRST_CONTACT_TOLERANCE or tighter
         let candidates = &contacts.obstacle;
         let first_contact = !candidates.is_empty()
             && (candidates.iter()).all(|c| self.normal_force[c.particle as usize] == 0.0);
+        let gh = self.model.gravity.length() * h;
+        let impact = !candidates.is_empty() && {
+            let (m, v0) = (&self.model.mass, &start.v0);
+            let e = obstacle::impact_energy(candidates, v0, m, gh);
+            e > 0.0 && e >= IMPACT_SHARE * obstacle::kinetic_energy(v0, m)
+        };
         let solver_settings = SolverSettings {
-            tolerance: match first_contact {
+            tolerance: match first_contact || impact {
                 true => self.settings.tolerance.min(FIRST_CONTACT_TOLERANCE),
                 false => self.settings.tolerance,
             },
             ..self.settings
         };
-        let gh = self.model.gravity.length() * h;
         let newton = self.settings.newton_iterations;
         let potential = Potential {
             t0: self.time,
