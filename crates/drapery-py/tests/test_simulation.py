@@ -124,6 +124,7 @@ def test_the_last_report_has_the_step_reports_fields_and_stage_times(drape_path)
     assert r["newton_iterations"] >= 1 and r["cg_iterations"] >= 1 and r["linear_solves"] >= 1
     assert r["obstacle_contacts"] >= 1
     assert 0 <= r["residual"] < 1e-5  # the scene's PCG tolerance is the default 1e-6
+    assert r["tolerance"] == 1e-6 and r["residual"] <= r["tolerance"]
     stages = r["stages"]
     names = ["guard", "pose", "detect", "linearize", "constrain", "solve", "update", "friction", "strain", "failsafe", "commit"]
     assert list(stages) == names + ["total"]

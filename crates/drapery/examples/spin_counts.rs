@@ -22,7 +22,8 @@
 //!
 //! The shape printed after each frame (then, after a `|`, the frame's CG iterations, linear
 //! solves, self-contact stencils and CCD hits summed over its steps, its wall time in ms and the
-//! ms of its solve, detect and fail-safe stages): the mean hinge angle (degrees), the mean and 99th
+//! ms of its solve, detect and fail-safe stages, and how many of its steps were solved to
+//! `FIRST_CONTACT_TOLERANCE`, first contacts and impacts): the mean hinge angle (degrees), the mean and 99th
 //! percentile of `|θ|/h` (1/m, a curvature that compares resolutions), the share of hinges bent
 //! over 30°, the least and greatest edge length over rest length, the share of edges shorter than
 //! 0.8 of their rest length, the greatest speed (m/s), and where the shortest edge is (its first
@@ -174,16 +175,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let (mut sim, h, per_frame) = simulation(n, false)?;
             let shape = Shape::new(&sim);
             println!(
-                "frame mean_angle_deg mean_curvature p99_curvature share_over_30deg min_stretch max_stretch share_under_0.8 max_speed shortest_x y z r | cg solves stencils ccd_hits ms ms_solve ms_detect ms_failsafe"
+                "frame mean_angle_deg mean_curvature p99_curvature share_over_30deg min_stretch max_stretch share_under_0.8 max_speed shortest_x y z r | cg solves stencils ccd_hits ms ms_solve ms_detect ms_failsafe tight_steps"
             );
             for f in 1..=count {
-                let (mut cg, mut solves, mut stencils, mut hits) = (0, 0, 0, 0);
+                let (mut cg, mut solves, mut stencils, mut hits, mut tight) = (0, 0, 0, 0, 0);
                 let mut times = drapery::StageTimes::default();
                 let t0 = std::time::Instant::now();
                 for _ in 0..per_frame {
                     let r = sim.step(h)?;
                     (cg, solves) = (cg + r.cg_iterations, solves + r.linear_solves);
                     (stencils, hits) = (stencils + r.self_contacts, hits + r.ccd_hits);
+                    tight += (r.tolerance <= drapery::step::FIRST_CONTACT_TOLERANCE) as usize;
                     times.solve += r.stages.solve;
                     times.detect += r.stages.detect;
                     times.failsafe += r.stages.failsafe;
@@ -194,7 +196,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let speed = (sim.velocities().iter()).fold(0.0f64, |m, v| m.max(v.length()));
                 let p = sim.positions()[at];
                 println!(
-                    "{f} {a:.3} {c:.3} {p99:.2} {o:.5} {lo:.4} {hi:.4} {short:.5} {speed:.3} {:.3} {:.3} {:.3} {:.4} | {cg} {solves} {stencils} {hits} {ms:.0} {:.0} {:.0} {:.0}",
+                    "{f} {a:.3} {c:.3} {p99:.2} {o:.5} {lo:.4} {hi:.4} {short:.5} {speed:.3} {:.3} {:.3} {:.3} {:.4} | {cg} {solves} {stencils} {hits} {ms:.0} {:.0} {:.0} {:.0} {tight}",
                     p.x,
                     p.y,
                     p.z,

@@ -151,34 +151,6 @@ impl<'a> Split<'a> {
             .for_each(|(i, yi)| *yi = self.row_product(i, x));
     }
 
-    /// `y = A z` for a `z` that is zero on most particles (the prescribed part of a filtered
-    /// solve), reading only the blocks of the columns where `z` is not zero: the same bits as
-    /// [`Split::mul_vec`], since the products it leaves out are exact zeros, and adding a zero
-    /// to a sum that starts at `+0` changes no bit.
-    pub fn mul_sparse_vec(&self, z: &[Vec3], y: &mut [Vec3]) {
-        let row = |m: &BlockMatrix, i: usize| {
-            let (cols, r) = m.row(i);
-            let mut acc = Vec3::ZERO;
-            for (&c, b) in cols.iter().zip(&m.values[r]) {
-                let zc = z[c as usize];
-                if zc != Vec3::ZERO {
-                    acc += *b * zc;
-                }
-            }
-            acc
-        };
-        y.par_iter_mut()
-            .enumerate()
-            .with_min_len(ROWS)
-            .for_each(|(i, yi)| {
-                let p = row(self.p, i);
-                *yi = match self.coupling {
-                    Some(c) => p + row(&c.m, i),
-                    None => p,
-                };
-            });
-    }
-
     /// The matrix `P + C` on one merged pattern (for the direct solver and inspection).
     pub fn merged(&self) -> BlockMatrix {
         let Some(c) = self.coupling else {
@@ -264,53 +236,6 @@ mod tests {
                 prop_assert!((y[i] - by_hand).length() <= 1e-12, "row {}", i);
                 let off = c.matrix().row(i).0.len() > 1;
                 prop_assert_eq!(c.rows().contains(&(i as u32)), off);
-            }
-        }
-
-        /// The product with a mostly zero vector gives the bits of the full product, signed
-        /// zeros and zero blocks in the vector included.
-        #[test]
-        fn the_sparse_product_is_the_full_product_bit_for_bit(
-            n in 2usize..30,
-            base in prop::collection::vec((0u32..30, 0u32..30), 0..60),
-            more in prop::collection::vec((0u32..30, 0u32..30), 0..20),
-            vals in prop::collection::vec(-1.0f64..1.0, 9 * 200),
-            z in prop::collection::vec((0u8..4, -1.0f64..1.0), 90),
-            coupled in any::<bool>(),
-        ) {
-            let clip = |v: &[(u32, u32)]| -> Vec<(u32, u32)> {
-                v.iter().map(|&(i, j)| (i % n as u32, j % n as u32)).collect()
-            };
-            let mut p = BlockMatrix::from_pairs(n, &clip(&base));
-            let mut c = Coupling::new(n, &clip(&more));
-            let mut k = 0;
-            let mut next = || {
-                k = (k + 9) % vals.len();
-                mat(&vals[k..k + 9])
-            };
-            p.values.iter_mut().for_each(|m| *m = next());
-            c.matrix_mut().values.iter_mut().for_each(|m| *m = next());
-            // most particles zero (some as -0), a few with one or more non-zero components
-            let comp = |(kind, v): (u8, f64)| match kind {
-                0 => 0.0,
-                1 => -0.0,
-                2 => v,
-                _ => 0.0,
-            };
-            let z: Vec<Vec3> = (0..n)
-                .map(|i| match i % 3 {
-                    0 => Vec3::new(comp(z[3 * i]), comp(z[3 * i + 1]), comp(z[3 * i + 2])),
-                    _ => Vec3::ZERO,
-                })
-                .collect();
-            let a = Split { p: &p, coupling: coupled.then_some(&c) };
-            let (mut y, mut want) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
-            a.mul_sparse_vec(&z, &mut y);
-            a.mul_vec(&z, &mut want);
-            for i in 0..n {
-                for (u, v) in y[i].to_array().iter().zip(want[i].to_array()) {
-                    prop_assert_eq!(u.to_bits(), v.to_bits(), "row {}", i);
-                }
             }
         }
 

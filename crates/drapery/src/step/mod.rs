@@ -247,6 +247,7 @@ impl Simulation {
             },
             ..self.settings
         };
+        report.tolerance = solver_settings.tolerance;
         let newton = self.settings.newton_iterations;
         let potential = Potential {
             t0: self.time,

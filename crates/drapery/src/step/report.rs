@@ -101,6 +101,10 @@ pub struct StepReport {
     pub preconditioner_setups: usize,
     /// Final relative residual of the last PCG solve (0 with the direct solver).
     pub residual: f64,
+    /// The PCG tolerance the step's solves used: the solver's, or at most
+    /// [`crate::step::FIRST_CONTACT_TOLERANCE`] at a first obstacle contact or an impact
+    /// ([`crate::step::IMPACT_SHARE`]).
+    pub tolerance: f64,
     /// Seconds spent assembling forces and matrices (the linearize stage).
     pub assembly_seconds: f64,
     /// Seconds spent in the linear solver and its constraints (constrain and solve stages).
