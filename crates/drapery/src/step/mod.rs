@@ -236,9 +236,8 @@ impl Simulation {
             && (candidates.iter()).all(|c| self.normal_force[c.particle as usize] == 0.0);
         let gh = self.model.gravity.length() * h;
         let impact = !candidates.is_empty() && {
-            let (m, v0) = (&self.model.mass, &start.v0);
-            let e = obstacle::impact_energy(candidates, v0, m, gh);
-            e > 0.0 && e >= IMPACT_SHARE * obstacle::kinetic_energy(v0, m)
+            let e = obstacle::impact_energy(candidates, &start.v0, &self.model.mass, gh);
+            e > 0.0 && e >= IMPACT_SHARE * start.ke0
         };
         let solver_settings = SolverSettings {
             tolerance: match first_contact || impact {
