@@ -359,20 +359,14 @@ impl Multigrid {
             return;
         };
         // every level but the coarsest, which keeps the factor of its matrix alone
-        let mut rows = couplings::Rows::fine(c, s);
-        for l in 0..last {
-            let next = match l + 1 < last {
-                true => {
-                    let t = self.levels[l].transfer.as_ref().expect("a transfer");
-                    Some(rows.galerkin(t, self.levels[l + 1].a.n()))
-                }
-                false => None,
-            };
-            self.couplings.push(rows);
-            let Some(next) = next else {
-                break;
-            };
-            rows = next;
+        if last == 0 {
+            return;
+        }
+        self.couplings.push(couplings::Rows::fine(c, s));
+        for l in 1..last {
+            let t = self.levels[l - 1].transfer.as_ref().expect("a transfer");
+            let coarse = self.couplings[l - 1].galerkin(t, self.levels[l].a.n());
+            self.couplings.push(coarse);
         }
     }
 
