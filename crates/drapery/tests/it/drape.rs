@@ -55,24 +55,45 @@ air_drag = {drag}
     )
 }
 
-/// Settles the scene and returns the drape coefficient and the largest speed left.
-fn drape(text: &str) -> (f64, f64) {
+/// A run is settled at the end of a tenth of a second when no vertex moves faster than
+/// `SETTLED_SPEED` (m/s) and the drape coefficient changed by at most `SETTLED_CHANGE` over the
+/// last half second. Stopping there instead of at the scene's 3 s halves the tests' time; the
+/// coefficients then differ from the 3 s ones by at most 0.07 % (docs/MATERIALS.md §4.4).
+const SETTLED_SPEED: f64 = 1e-3;
+const SETTLED_CHANGE: f64 = 1e-3;
+
+/// The drape coefficient of the specimen at positions `x`.
+fn coefficient(scene: &Scene, x: &[Vec3]) -> f64 {
+    let tri = scene.cloths[0].mesh.triangles();
+    drape_coefficient(x, &tri, Vec3::Y, RS, RD).unwrap()
+}
+
+/// Runs the scene until it is settled (see [`SETTLED_SPEED`]) or ends; returns the drape
+/// coefficient, the largest speed left and whether it settled.
+fn drape(text: &str) -> (f64, f64, bool) {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/cusick.toml");
     let scene = Scene::from_str(text, &path).unwrap();
     let mut sim = scene.start().unwrap();
     let dt = scene.step_size();
-    for _ in 0..scene.step_count() {
+    let top_speed = |v: &[Vec3]| v.iter().map(|v| v.length()).fold(0.0, f64::max);
+    // the coefficient at the end of each tenth of a second
+    let mut dcs = Vec::new();
+    let tenth = (0.1 / dt).round() as usize;
+    for k in 1..=scene.step_count() {
         sim.step(dt).unwrap();
+        if k % tenth == 0 {
+            dcs.push(coefficient(&scene, sim.positions()));
+            let &[.., before, _, _, _, _, now] = dcs.as_slice() else {
+                continue;
+            };
+            if (now - before).abs() <= SETTLED_CHANGE && top_speed(sim.velocities()) < SETTLED_SPEED
+            {
+                return (now, top_speed(sim.velocities()), true);
+            }
+        }
     }
-    let x = sim.positions();
-    let tri = scene.cloths[0].mesh.triangles();
-    let dc = drape_coefficient(x, &tri, Vec3::Y, RS, RD).unwrap();
-    let speed = sim
-        .velocities()
-        .iter()
-        .map(|v| v.length())
-        .fold(0.0, f64::max);
-    (dc, speed)
+    let dc = coefficient(&scene, sim.positions());
+    (dc, top_speed(sim.velocities()), false)
 }
 
 /// Issue 16's resolution test: the coefficient at 2 cm, 1.5 cm and 1 cm agrees with 5 mm within
@@ -85,12 +106,12 @@ fn cusick_drape_coefficient_is_resolution_independent() {
     let mut dcs = Vec::new();
     for h in [0.02, 0.015, 0.01, 0.005] {
         let t = Instant::now();
-        let (dc, speed) = drape(&cusick_scene(h, density, "material = \"cotton\""));
+        let (dc, speed, settled) = drape(&cusick_scene(h, density, "material = \"cotton\""));
         eprintln!(
             "cotton, h = {h}: DC {dc:.4}, speed {speed:.2e}, {:.1} s",
             t.elapsed().as_secs_f64()
         );
-        assert!(speed < 1e-2, "h = {h}: not settled, speed {speed}");
+        assert!(settled, "h = {h}: not settled in 3 s, speed {speed}");
         assert!(dc > 0.0 && dc < 1.0, "h = {h}: DC {dc}");
         dcs.push((h, dc));
     }
@@ -198,7 +219,7 @@ fn cusick_drape_of_the_presets_is_ordered_by_bending_length() {
         let b = (f.bending_rigidity[0] * f.bending_rigidity[1]).sqrt();
         let c = (b / (f.density * G)).cbrt();
         let t = Instant::now();
-        let (dc, speed) = drape(&cusick_scene(
+        let (dc, speed, settled) = drape(&cusick_scene(
             H,
             f.density,
             &format!("material = \"{name}\""),
@@ -208,7 +229,7 @@ fn cusick_drape_of_the_presets_is_ordered_by_bending_length() {
             100.0 * c,
             t.elapsed().as_secs_f64()
         );
-        assert!(speed < 1e-2, "{name}: not settled, speed {speed}");
+        assert!(settled, "{name}: not settled in 3 s, speed {speed}");
         runs.push((name.to_string(), c, dc));
     }
     assert_ordered(&runs, 0.03);
@@ -230,7 +251,8 @@ fn cusick_drape_of_matsudaira_s_fabrics_is_ordered_like_the_measurement() {
             "model = \"shell\"\ndensity = {rho}\nstretch_modulus = [{}, {}]\npoisson = {}\nshear_modulus = {}\nbending_rigidity = {b}\ndamping = {}",
             p.stretch_modulus[0], p.stretch_modulus[1], p.poisson, p.shear_modulus, p.damping
         );
-        let (dc, speed) = drape(&cusick_scene(H, rho, &keys));
+        // (polyester faille, the limpest, still creeps over the rim at 3 s: not asserted)
+        let (dc, speed, _) = drape(&cusick_scene(H, rho, &keys));
         let c = (b / (rho * G)).cbrt();
         eprintln!(
             "{name}: c = {:.2} cm, DC {dc:.4} (measured {measured}), speed {speed:.2e}",
