@@ -251,7 +251,7 @@ fn cusick_drape_of_matsudaira_s_fabrics_is_ordered_like_the_measurement() {
             "model = \"shell\"\ndensity = {rho}\nstretch_modulus = [{}, {}]\npoisson = {}\nshear_modulus = {}\nbending_rigidity = {b}\ndamping = {}",
             p.stretch_modulus[0], p.stretch_modulus[1], p.poisson, p.shear_modulus, p.damping
         );
-        // (polyester faille, the limpest, still creeps over the rim at 3 s: not asserted)
+        // (polyester faille, the limpest, is still folding in at 3 s: not asserted)
         let (dc, speed, _) = drape(&cusick_scene(H, rho, &keys));
         let c = (b / (rho * G)).cbrt();
         eprintln!(
