@@ -57,9 +57,11 @@ air_drag = {drag}
 
 /// A run is settled at the end of a tenth of a second when no vertex moves faster than
 /// `SETTLED_SPEED` (m/s) and the drape coefficient changed by at most `SETTLED_CHANGE` over the
-/// last half second. Stopping there instead of at the scene's 3 s halves the tests' time; the
-/// coefficients then differ from the 3 s ones by at most 0.07 % (docs/MATERIALS.md §4.4).
+/// last half second. Stopping there instead of at the scene's 3 s leaves out about 40 % of the
+/// simulated time; the coefficients then differ from the 3 s ones by at most 0.07 %
+/// (docs/MATERIALS.md §4.4).
 const SETTLED_SPEED: f64 = 1e-3;
+/// See [`SETTLED_SPEED`].
 const SETTLED_CHANGE: f64 = 1e-3;
 
 /// The drape coefficient of the specimen at positions `x`.
