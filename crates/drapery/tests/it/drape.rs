@@ -64,12 +64,6 @@ const SETTLED_SPEED: f64 = 1e-3;
 /// See [`SETTLED_SPEED`].
 const SETTLED_CHANGE: f64 = 1e-3;
 
-/// The drape coefficient of the specimen at positions `x`.
-fn coefficient(scene: &Scene, x: &[Vec3]) -> f64 {
-    let tri = scene.cloths[0].mesh.triangles();
-    drape_coefficient(x, &tri, Vec3::Y, RS, RD).unwrap()
-}
-
 /// Runs the scene until it is settled (see [`SETTLED_SPEED`]) or ends; returns the drape
 /// coefficient, the largest speed left and whether it settled.
 fn drape(text: &str) -> (f64, f64, bool) {
@@ -77,6 +71,8 @@ fn drape(text: &str) -> (f64, f64, bool) {
     let scene = Scene::from_str(text, &path).unwrap();
     let mut sim = scene.start().unwrap();
     let dt = scene.step_size();
+    let tri = scene.cloths[0].mesh.triangles();
+    let coefficient = |x: &[Vec3]| drape_coefficient(x, &tri, Vec3::Y, RS, RD).unwrap();
     let top_speed = |v: &[Vec3]| v.iter().map(|v| v.length()).fold(0.0, f64::max);
     // the coefficient at the end of each tenth of a second
     let mut dcs = Vec::new();
@@ -84,17 +80,17 @@ fn drape(text: &str) -> (f64, f64, bool) {
     for k in 1..=scene.step_count() {
         sim.step(dt).unwrap();
         if k % tenth == 0 {
-            dcs.push(coefficient(&scene, sim.positions()));
+            dcs.push(coefficient(sim.positions()));
             let &[.., before, _, _, _, _, now] = dcs.as_slice() else {
                 continue;
             };
-            if (now - before).abs() <= SETTLED_CHANGE && top_speed(sim.velocities()) < SETTLED_SPEED
-            {
-                return (now, top_speed(sim.velocities()), true);
+            let speed = top_speed(sim.velocities());
+            if (now - before).abs() <= SETTLED_CHANGE && speed < SETTLED_SPEED {
+                return (now, speed, true);
             }
         }
     }
-    let dc = coefficient(&scene, sim.positions());
+    let dc = coefficient(sim.positions());
     (dc, top_speed(sim.velocities()), false)
 }
 
