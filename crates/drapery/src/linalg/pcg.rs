@@ -307,9 +307,14 @@ fn iterate(
                 acc
             })
         };
-        let delta_new = precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.s);
         stats.iterations += 1;
         *rnorm = rr.sqrt();
+        if *rnorm <= target {
+            // converged: the next direction, and the preconditioner application it takes,
+            // would not be used
+            break;
+        }
+        let delta_new = precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.s);
         if !(delta_new > 0.0) && *rnorm > target {
             // rᵀ P⁻¹ r ≤ 0 for r ≠ 0: the preconditioner is not positive definite
             stats.bad_preconditioner = true;
