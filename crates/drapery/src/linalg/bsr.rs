@@ -228,15 +228,12 @@ impl BlockMatrix {
             .for_each(|(i, yi)| *yi = self.row_product(i, x));
     }
 
-    /// Row `i` of `A x`.
+    /// Row `i` of `A x`, added block by block in column order (with AVX where the CPU has it,
+    /// the same bits either way: [`super::block::add_products`]).
     #[inline]
     pub fn row_product(&self, i: usize, x: &[Vec3]) -> Vec3 {
         let (cols, r) = self.row(i);
-        let mut acc = Vec3::ZERO;
-        for (c, m) in cols.iter().zip(&self.values[r]) {
-            acc += *m * x[*c as usize];
-        }
-        acc
+        super::block::add_products(Vec3::ZERO, &self.values[r], cols, x)
     }
 
     /// Dense copy (tests and small debugging only).

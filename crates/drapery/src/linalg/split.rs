@@ -90,12 +90,7 @@ impl Coupling {
     /// Row `i` of `C x`.
     #[inline]
     pub fn row_product(&self, i: usize, x: &[Vec3]) -> Vec3 {
-        let (cols, r) = self.m.row(i);
-        let mut acc = Vec3::ZERO;
-        for (&c, m) in cols.iter().zip(&self.m.values[r]) {
-            acc += *m * x[c as usize];
-        }
-        acc
+        self.m.row_product(i, x)
     }
 }
 

@@ -17,6 +17,7 @@
 //! its factor of `P̂`.
 
 use super::Transfer;
+use crate::linalg::block::add_products;
 use crate::linalg::split::Coupling;
 use crate::math::{Mat3, Vec3};
 
@@ -128,11 +129,7 @@ impl Rows {
     #[inline]
     fn row_product(&self, k: usize, x: &[Vec3]) -> Vec3 {
         let e = self.ptr[k] as usize..self.ptr[k + 1] as usize;
-        let mut sum = Vec3::ZERO;
-        for (&j, m) in self.col[e.clone()].iter().zip(&self.val[e]) {
-            sum += *m * x[j as usize];
-        }
-        sum
+        add_products(Vec3::ZERO, &self.val[e.clone()], &self.col[e], x)
     }
 
     /// `w -= Ĉ x` on the rows.
