@@ -1,7 +1,8 @@
-//! 3×3 block products of the multigrid (`A P`, `Pᵀ (A P)`, `D⁻¹ A` in the set-up, the
-//! restriction and the prolongation in the cycle), with AVX when the CPU running the program
-//! has it ([`super::simd`]), and glam's scalar code otherwise. Both add in the same order, so
-//! they give the same bits.
+//! 3×3 block products: the multigrid's (`A P`, `Pᵀ (A P)`, `D⁻¹ A` in the set-up, the
+//! restriction and the prolongation in the cycle) and the block rows of a matrix times a vector
+//! (`BlockMatrix::row_product`, `Coupling::row_product`), with AVX when the CPU running the
+//! program has it ([`super::simd`]), and glam's scalar code otherwise. Both add in the same
+//! order, so they give the same bits.
 
 use crate::math::{Mat3, Vec3};
 

@@ -315,6 +315,8 @@ fn iterate(
             break;
         }
         let delta_new = precondition(multigrid.then_some(&mut w.amg), &w.pinv, s, &w.r, &mut w.s);
+        // (`‖r‖ > target` is false here only for a NaN residual: it keeps that case on the
+        // path it always took)
         if !(delta_new > 0.0) && *rnorm > target {
             // rᵀ P⁻¹ r ≤ 0 for r ≠ 0: the preconditioner is not positive definite
             stats.bad_preconditioner = true;
