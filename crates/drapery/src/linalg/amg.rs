@@ -68,7 +68,7 @@ pub struct AmgParams {
     /// [`AmgParams::power_steps`]); `ω ρ` must stay below 2 for the cycle to be positive
     /// definite.
     pub smoother_weight: f64,
-    /// Power steps estimating `ρ(D⁻¹A)` on each level at every refresh (at least 20 on
+    /// Power steps estimating `ρ(D⁻¹A)` on each level at every full refresh (at least 20 on
     /// small levels). The estimate is a lower bound; 6 steps reached 0.97–0.99 of `ρ` on the
     /// finest level of the hanging and draped 64² and 128² sheets, so `ω ρ` stays near
     /// `smoother_weight`. With 4 the CG iterations per step of the hanging 64² and 128² cloths
@@ -269,13 +269,18 @@ impl Multigrid {
     }
 
     /// Refreshes the finest level only, for the matrix `a` under a new filter `s`: its filtered
-    /// matrix and its smoother (block diagonal and damping) are recomputed; the prolongators and
-    /// the coarse levels are kept as the last refresh left them. For the obstacle active set's
-    /// later rounds, where only a few contacts' filters change: the cycle's coarse correction
-    /// is then that of the earlier filter, a slightly worse approximation, but the cycle stays
-    /// symmetric positive definite (a convergent smoother with any symmetric positive definite
-    /// coarse operator; docs/MATH.md §14), and the products of PCG use the new filtered matrix
-    /// exactly. A full [`Multigrid::refresh`] when `a`'s pattern is not the hierarchy's.
+    /// matrix and its smoother's block diagonal are recomputed; the smoother's damping, the
+    /// prolongators and the coarse levels are kept as the last refresh left them. For the
+    /// obstacle active set's later rounds, where only a few contacts' filters change: the
+    /// cycle's coarse correction is then that of the earlier filter, a slightly worse
+    /// approximation, but the cycle stays symmetric positive definite (a convergent smoother
+    /// with any symmetric positive definite coarse operator; docs/MATH.md §14), and the
+    /// products of PCG use the new filtered matrix exactly. The damping `ω = weight / ρ̄` is
+    /// kept because `ρ(D⁻¹Â)` hardly moves when a few filters change (spin-290's later
+    /// rounds: the power estimate moved by 1e-4 relative, for 17–28 ms of products each);
+    /// should it grow past `2 / ω` the cycle is indefinite, which PCG detects and answers with
+    /// [`Multigrid::refresh_bounded`]. A full [`Multigrid::refresh`] when `a`'s pattern is not
+    /// the hierarchy's.
     ///
     /// The result depends on what the kept levels were refreshed from, so a caller that needs
     /// the same bits after a resume calls it only after a full refresh of the same solve

@@ -150,8 +150,9 @@ pub fn solve_split(
         prepare(p, s, settings, w, &mut stats);
         prepared = true;
     }
-    // Reference residual: the zero guess on the free part.
-    a.mul_vec(z, &mut w.q);
+    // Reference residual: the zero guess on the free part (`z` is zero but at the constrained
+    // particles, so only the rows that reach one of them are multiplied).
+    a.mul_vec_sparse(z, &mut w.q);
     for i in 0..n {
         w.r[i] = s[i] * (b[i] - w.q[i]);
     }

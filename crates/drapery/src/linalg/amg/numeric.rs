@@ -32,11 +32,12 @@ pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3], bound: bo
     cycle::factor_coarsest(mg);
 }
 
-/// [`Multigrid::refresh_fine`]: the finest level's filtered matrix and smoother only.
+/// [`Multigrid::refresh_fine`]: the finest level's filtered matrix and the inverses of its
+/// diagonal blocks only; the smoother's damping is the last full refresh's.
 pub(super) fn refresh_fine(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3]) {
     let fine = &mut mg.levels[0];
     filter_matrix(a, s, &mut fine.a, &mut fine.sym);
-    smoother(fine, &mg.params, false);
+    diagonal_inverses(fine);
     if mg.levels.len() == 1 {
         cycle::factor_coarsest(mg);
     }
@@ -133,12 +134,8 @@ fn sym_inverse(d: &Mat3) -> Mat3 {
 /// used anyway: `ω ρ ≤ weight < 2` is then guaranteed, where a power estimate far below `ρ` (a
 /// few very stiff contact rows, say) can leave `ω ρ ≥ 2` and the cycle indefinite.
 pub(super) fn smoother(lvl: &mut Level, params: &AmgParams, bound: bool) {
+    diagonal_inverses(lvl);
     let a = &lvl.a;
-    lvl.dinv
-        .par_iter_mut()
-        .enumerate()
-        .with_min_len(ROWS)
-        .for_each(|(i, dinv)| *dinv = sym_inverse(&a.values[a.diag_index(i)]));
     // more steps on the small levels, where they cost nothing
     let steps = if a.n() > COARSE_ROWS {
         params.power_steps
@@ -166,6 +163,16 @@ pub(super) fn smoother(lvl: &mut Level, params: &AmgParams, bound: bool) {
     } else {
         1.0
     };
+}
+
+/// The smoother's `D⁻¹`: the symmetric inverse of each diagonal block of the level's matrix.
+fn diagonal_inverses(lvl: &mut Level) {
+    let a = &lvl.a;
+    lvl.dinv
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(ROWS)
+        .for_each(|(i, dinv)| *dinv = sym_inverse(&a.values[a.diag_index(i)]));
 }
 
 /// `max_i Σ_j ‖D_i⁻¹ A_ij‖_∞`, an upper bound of `ρ(D⁻¹A)`.
