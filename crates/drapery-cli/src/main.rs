@@ -7,6 +7,12 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+/// mimalloc keeps the memory a step frees for the next one; the system allocator returned
+/// the large per-step arrays to the kernel and faulted them in again, about 50 000 page faults
+/// per spin-290 step (BENCHMARKS.md, twenty-third session). Results are the same bits.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 mod bench;
 mod check;
 mod colliders;

@@ -31,6 +31,10 @@
 //! run the scene in that file instead (a variant of `drapery bench --write-scenes`'s spin-N,
 //! e.g. another material, same size N) (BENCHMARKS.md, "Tenth session").
 
+/// The command's allocator (crates/drapery-cli/src/main.rs), so that the stage times match it.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 use drapery::forces::hinge::{dihedral_angle, interior_edges};
 use drapery::presets::Preset;
 use drapery::scene::Scene;
