@@ -160,11 +160,18 @@ impl<'a> SweptBoxes<'a> {
                 .map(f)
                 .collect()
         };
-        let [vertices, tris, edge_tree] = cache.trees([
+        let [mut vertices, mut tris, mut edge_tree] = cache.trees([
             each(x0.len(), &|v| boxes(&[v])),
             each(triangles.len(), &|t| boxes(&triangles[t as usize])),
             each(edges.len(), &|e| boxes(&edges[e as usize])),
         ]);
+        // pairs that share a vertex are never candidates
+        vertices.set_vertices(|v| [v; 3]);
+        tris.set_vertices(|t| triangles[t as usize]);
+        edge_tree.set_vertices(|e| {
+            let [a, b] = edges[e as usize];
+            [a, b, b]
+        });
         SweptBoxes {
             half_margin: r,
             triangles,
@@ -183,14 +190,13 @@ impl<'a> SweptBoxes<'a> {
         }
     }
 
+    /// (the trees leave out the pairs that share a vertex, [`Bvh::set_vertices`])
     fn vertex_triangle(&self, vertices: &Bvh, tris: &Bvh) -> Vec<(u32, u32)> {
-        let tri = self.triangles;
-        vertices.pairs_with(tris, &|v, t| !tri[t as usize].contains(&v))
+        vertices.pairs_with(tris, &|_, _| true)
     }
 
     fn edge_edge(&self, edges: &Bvh) -> Vec<(u32, u32)> {
-        let e = self.edges;
-        edges.self_pairs(&|a, b| !shares_vertex(e[a as usize], e[b as usize]))
+        edges.self_pairs(&|_, _| true)
     }
 
     /// The candidates of the motion `x0 → x1` (as [`candidates`] would list them) that involve
@@ -220,10 +226,6 @@ impl<'a> SweptBoxes<'a> {
             ee: self.edge_edge(&edges),
         }
     }
-}
-
-fn shares_vertex(a: [u32; 2], b: [u32; 2]) -> bool {
-    a.contains(&b[0]) || a.contains(&b[1])
 }
 
 /// All pairs `(i, j)`, `i < j`, of overlapping boxes, sorted.

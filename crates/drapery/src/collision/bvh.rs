@@ -195,6 +195,9 @@ pub struct Bvh {
     right: Vec<u32>,
     /// Marked primitives (leaf order) and subtrees holding one, when the tree is marked.
     marks: Option<(Vec<bool>, Vec<bool>)>,
+    /// The primitives' vertices in leaf order (a vertex or an edge repeats its last one), when
+    /// set ([`Bvh::set_vertices`]): pairs of primitives that share one are not reported.
+    vertices: Vec<[u32; 3]>,
 }
 
 impl Bvh {
@@ -244,11 +247,25 @@ impl Bvh {
             nodes: Vec::with_capacity(self.nodes.len()),
             right: Vec::with_capacity(self.right.len()),
             marks: None,
+            vertices: self.vertices.clone(),
         };
         if !t.prims.is_empty() {
             t.grow(0, t.prims.len() as u32);
         }
         t
+    }
+
+    /// Sets the vertices of each primitive (`of(i)` for primitive `i`; a vertex `[v, v, v]`, an
+    /// edge `[a, b, b]`): the traversals then leave out the pairs that share a vertex, before
+    /// `keep` and the box test. Read in leaf order, next to the boxes, this costs less than
+    /// looking the primitives up in the mesh for each pair (a `keep` that does so).
+    pub fn set_vertices(&mut self, of: impl Fn(u32) -> [u32; 3] + Sync) {
+        self.vertices = self
+            .order
+            .par_iter()
+            .with_min_len(1024)
+            .map(|&i| of(i))
+            .collect();
     }
 
     /// Marks the primitives for which `marked` is true: the traversals then report only the
@@ -338,8 +355,8 @@ impl Bvh {
 
     /// The pairs `(i, j)` of primitives of this tree whose moving boxes meet, `i < j` by
     /// primitive index, for which `keep(i, j)` is true, sorted (with marks: only pairs with a
-    /// marked primitive).
-    pub fn self_pairs(&self, keep: &(dyn Fn(u32, u32) -> bool + Sync)) -> Vec<(u32, u32)> {
+    /// marked primitive; with vertices set, only pairs that share none).
+    pub fn self_pairs<K: Fn(u32, u32) -> bool + Sync>(&self, keep: &K) -> Vec<(u32, u32)> {
         let mut out = Vec::new();
         if !self.prims.is_empty() {
             self.within(self.root(), keep, &mut out);
@@ -350,11 +367,11 @@ impl Bvh {
 
     /// The pairs `(i, j)`, `i` of this tree's primitives and `j` of `other`'s, whose moving
     /// boxes meet and for which `keep(i, j)` is true, sorted (with marks on either tree: only
-    /// pairs with a marked primitive).
-    pub fn pairs_with(
+    /// pairs with a marked primitive; with vertices set on both, only pairs that share none).
+    pub fn pairs_with<K: Fn(u32, u32) -> bool + Sync>(
         &self,
         other: &Bvh,
-        keep: &(dyn Fn(u32, u32) -> bool + Sync),
+        keep: &K,
     ) -> Vec<(u32, u32)> {
         let mut out = Vec::new();
         if !self.prims.is_empty() && !other.prims.is_empty() {
@@ -366,7 +383,7 @@ impl Bvh {
     }
 
     /// The pairs within the subtree `at`.
-    fn within(&self, at: At, keep: &(dyn Fn(u32, u32) -> bool + Sync), out: &mut Vec<(u32, u32)>) {
+    fn within<K: Fn(u32, u32) -> bool + Sync>(&self, at: At, keep: &K, out: &mut Vec<(u32, u32)>) {
         if self.is_marked() && !self.node_marked(at) {
             return;
         }
@@ -411,16 +428,22 @@ struct Both<'a> {
 impl Both<'_> {
     /// The pair of leaf positions `i` (in `a`) and `j` (in `b`), by primitive index (the
     /// smaller first when both are of one tree).
-    fn leaf(
+    fn leaf<K: Fn(u32, u32) -> bool + Sync>(
         self,
         i: usize,
         j: usize,
-        keep: &(dyn Fn(u32, u32) -> bool + Sync),
+        keep: &K,
         out: &mut Vec<(u32, u32)>,
     ) {
         let (a, b) = (self.a, self.b);
         if (a.is_marked() || b.is_marked()) && !(a.prim_marked(i) || b.prim_marked(j)) {
             return;
+        }
+        if !a.vertices.is_empty() && !b.vertices.is_empty() {
+            let (u, w) = (a.vertices[i], b.vertices[j]);
+            if u.iter().any(|k| w.contains(k)) {
+                return;
+            }
         }
         let (p, q) = (a.order[i], b.order[j]);
         let (p, q) = if std::ptr::eq(a, b) {
@@ -428,19 +451,19 @@ impl Both<'_> {
         } else {
             (p, q)
         };
-        // `keep` first: it is an index test, and most pairs of neighbouring boxes are
-        // neighbours in the mesh (sharing a vertex), which it drops
+        // `keep` before the box test: an index test (most pairs of neighbouring boxes are
+        // neighbours in the mesh, which the shared vertices above or `keep` drop)
         if keep(p, q) && a.prims[i].meets(&b.prims[j]) {
             out.push((p, q));
         }
     }
 
     /// The pairs of a primitive under `x` (in `a`) and one under `y` (in `b`).
-    fn between(
+    fn between<K: Fn(u32, u32) -> bool + Sync>(
         self,
         x: At,
         y: At,
-        keep: &(dyn Fn(u32, u32) -> bool + Sync),
+        keep: &K,
         out: &mut Vec<(u32, u32)>,
     ) {
         let (a, b) = (self.a, self.b);
@@ -612,6 +635,20 @@ mod tests {
             // (the other tree unmarked: its primitives count as unmarked)
             let between_marked: Vec<_> = between.iter().copied().filter(|&(i, _)| on(i)).collect();
             prop_assert_eq!(marked.pairs_with(&tb, &odd), between_marked);
+            // vertices: pairs that share one are left out (ids from a few, so that many share),
+            // on a refit too
+            let ids = |i: u32, k: u32| [(i * 7 + k) % 11, (i * 3 + 2 * k) % 13, (i + k) % 5];
+            let share = |u: [u32; 3], w: [u32; 3]| u.iter().any(|x| w.contains(x));
+            let (mut va, mut vb) = (ta.clone(), tb.clone());
+            va.set_vertices(|i| ids(i, 0));
+            vb.set_vertices(|j| ids(j, 1));
+            let apart = |i: u32, j: u32, k: u32| !share(ids(i, 0), ids(j, k));
+            let want_apart: Vec<_> = want.iter().copied().filter(|&(i, j)| apart(i, j, 0)).collect();
+            prop_assert_eq!(va.self_pairs(&odd), want_apart.clone());
+            prop_assert_eq!(va.refit(|i| a[i as usize]).self_pairs(&odd), want_apart);
+            let between_apart: Vec<_> =
+                between.iter().copied().filter(|&(i, j)| apart(i, j, 1)).collect();
+            prop_assert_eq!(va.pairs_with(&vb, &odd), between_apart);
         }
 
         /// Conservative: two segments whose points come within `2r` of each other on every axis
