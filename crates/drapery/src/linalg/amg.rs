@@ -277,7 +277,7 @@ impl Multigrid {
     /// with any symmetric positive definite coarse operator; docs/MATH.md §14), and the
     /// products of PCG use the new filtered matrix exactly. The damping `ω = weight / ρ̄` is
     /// kept because `ρ(D⁻¹Â)` hardly moves when a few filters change (spin-290's later
-    /// rounds: the power estimate moved by 1e-4 relative, for 17–28 ms of products each);
+    /// rounds: the power estimate moved by 1e-4 relative, for 19–24 ms of products each);
     /// should it grow past `2 / ω` the cycle is indefinite, which PCG detects and answers with
     /// [`Multigrid::refresh_bounded`]. A full [`Multigrid::refresh`] when `a`'s pattern is not
     /// the hierarchy's.
