@@ -250,6 +250,9 @@ pub struct Multigrid {
     /// The couplings outside the pattern on each level but the coarsest, finest first
     /// ([`Multigrid::set_couplings`]).
     couplings: Vec<couplings::Rows>,
+    /// The filter the finest level's values were last computed with, so that
+    /// [`Multigrid::refresh_fine`] recomputes only the rows a changed filter reaches.
+    fine_filter: Vec<Mat3>,
 }
 
 impl Multigrid {
@@ -285,6 +288,10 @@ impl Multigrid {
     /// The result depends on what the kept levels were refreshed from, so a caller that needs
     /// the same bits after a resume calls it only after a full refresh of the same solve
     /// sequence (see `step::solve`).
+    ///
+    /// `a` must hold the values the last refresh (full or of the finest level) was given:
+    /// only the block rows of particles whose filter changed since, and of their neighbours,
+    /// are recomputed (the same bits as recomputing every row).
     pub fn refresh_fine(&mut self, a: &BlockMatrix, s: &[Mat3]) {
         if self.levels.first().is_none_or(|l| !l.a.same_pattern(a)) {
             self.refresh(a, s);
@@ -412,7 +419,9 @@ impl Multigrid {
     fn build(&mut self, a: &BlockMatrix, s: &[Mat3], bound: bool) {
         self.levels.clear();
         let mut fine = Level::new(a.clone());
-        numeric::filter_matrix(a, s, &mut fine.a, &mut fine.sym);
+        numeric::filter_matrix(a, s, None, &mut fine.a, &mut fine.sym);
+        self.fine_filter.clear();
+        self.fine_filter.extend_from_slice(s);
         self.levels.push(fine);
         loop {
             let l = self.levels.len() - 1;

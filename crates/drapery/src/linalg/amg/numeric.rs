@@ -16,7 +16,9 @@ const ROWS: usize = 128;
 /// bound of `ρ` when `bound` is set, see [`smoother`]).
 pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3], bound: bool) {
     let fine = &mut mg.levels[0];
-    filter_matrix(a, s, &mut fine.a, &mut fine.sym);
+    filter_matrix(a, s, None, &mut fine.a, &mut fine.sym);
+    mg.fine_filter.clear();
+    mg.fine_filter.extend_from_slice(s);
     let params = mg.params;
     for l in 0..mg.levels.len() {
         let (head, tail) = mg.levels.split_at_mut(l + 1);
@@ -34,20 +36,47 @@ pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3], bound: bo
 
 /// [`Multigrid::refresh_fine`]: the finest level's filtered matrix and the inverses of its
 /// diagonal blocks only; the smoother's damping is the last full refresh's.
+///
+/// Only the rows that the filters changed since the last refresh reach are recomputed: a block
+/// `(i, j)` of `S A S + D_c (I - S)` depends on `A_ij`, `S_i` and `S_j` alone, and a diagonal
+/// inverse on its own row's, so with `a` unchanged the result is the same bits as recomputing
+/// every row. Filters are compared by their bits.
 pub(super) fn refresh_fine(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3]) {
     let fine = &mut mg.levels[0];
-    filter_matrix(a, s, &mut fine.a, &mut fine.sym);
-    diagonal_inverses(fine);
+    if mg.fine_filter.len() == s.len() {
+        let changed: Vec<bool> = s
+            .par_iter()
+            .zip(&mg.fine_filter)
+            .with_min_len(1024)
+            .map(|(p, q)| bits(p) != bits(q))
+            .collect();
+        filter_matrix(a, s, Some(&changed), &mut fine.a, &mut fine.sym);
+        diagonal_inverses_of(fine, Some(&changed));
+        mg.fine_filter.copy_from_slice(s);
+    } else {
+        filter_matrix(a, s, None, &mut fine.a, &mut fine.sym);
+        diagonal_inverses(fine);
+        mg.fine_filter.clear();
+        mg.fine_filter.extend_from_slice(s);
+    }
     if mg.levels.len() == 1 {
         cycle::factor_coarsest(mg);
     }
 }
 
+/// The bits of a block's entries.
+fn bits(m: &Mat3) -> [u64; 9] {
+    m.to_cols_array().map(f64::to_bits)
+}
+
 /// `out = S A S + D_c (I - S)` (see [`constrained_scale`]) block by block (`out` has the
-/// pattern of `a`), and its upper triangle into `upper` in the same pass.
+/// pattern of `a`), and its upper triangle into `upper` in the same pass. With `changed`,
+/// only the rows of the particles it marks and of their neighbours are written (the others
+/// are left as they are).
 pub(super) fn filter_matrix(
     a: &BlockMatrix,
     s: &[Mat3],
+    changed: Option<&[bool]>,
     out: &mut BlockMatrix,
     upper: &mut SymBlockMatrix,
 ) {
@@ -74,6 +103,14 @@ pub(super) fn filter_matrix(
             let mut at = 0;
             for i in rows {
                 let (cols, r) = a.row(i);
+                if let Some(c) = changed
+                    && !c[i]
+                    && !cols.iter().any(|&j| c[j as usize])
+                {
+                    // the row's blocks from its diagonal on are its upper-triangle entries
+                    at += r.end - a.diag_index(i);
+                    continue;
+                }
                 for (&j, k) in cols.iter().zip(r) {
                     let j = j as usize;
                     let m = a.values[k];
@@ -167,11 +204,17 @@ pub(super) fn smoother(lvl: &mut Level, params: &AmgParams, bound: bool) {
 
 /// The smoother's `D⁻¹`: the symmetric inverse of each diagonal block of the level's matrix.
 fn diagonal_inverses(lvl: &mut Level) {
+    diagonal_inverses_of(lvl, None);
+}
+
+/// [`diagonal_inverses`] of the rows `only` marks (all without it).
+fn diagonal_inverses_of(lvl: &mut Level, only: Option<&[bool]>) {
     let a = &lvl.a;
     lvl.dinv
         .par_iter_mut()
         .enumerate()
         .with_min_len(ROWS)
+        .filter(|(i, _)| only.is_none_or(|o| o[*i]))
         .for_each(|(i, dinv)| *dinv = sym_inverse(&a.values[a.diag_index(i)]));
 }
 
