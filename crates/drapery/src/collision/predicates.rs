@@ -6,6 +6,13 @@
 //! determinant is recomputed exactly as a sum of `f64` terms (exact products via fused
 //! multiply-add, exact sums via non-overlapping expansions, after Shewchuk's "Adaptive Precision
 //! Floating-Point Arithmetic").
+//!
+//! On a flat sheet every pair of neighbouring triangles is coplanar, so every test takes the
+//! exact path: a run's first step checks the starting mesh for tangles, and spent 7 of its 11 s
+//! there at 290² vertices. When the coordinate differences are themselves exact (nearby
+//! vertices, Sterbenz), the determinant is summed from 24 terms instead of 192 (4 instead of 16
+//! in 2D), a column of zero differences (points in a plane, or on a line, normal to an axis)
+//! gives 0 at once, and the terms stay on the stack.
 
 use crate::math::Vec3;
 
@@ -25,29 +32,92 @@ fn two_product(a: f64, b: f64) -> (f64, f64) {
     (p, a.mul_add(b, -p))
 }
 
-/// Adds `b` to the non-overlapping expansion `e` (increasing magnitude), exactly.
-fn grow(e: &mut Vec<f64>, b: f64) {
-    let mut q = b;
-    for h in e.iter_mut() {
-        let (s, err) = two_sum(q, *h);
-        *h = err;
-        q = s;
-    }
-    e.push(q);
-    e.retain(|&h| h != 0.0);
+/// Up to `N` exact terms, on the stack (the predicates run millions of times on a flat sheet,
+/// where every neighbouring pair is coplanar and takes the exact path). [`orient3d`]'s general
+/// case needs the most: six products of three two-term factors, 32 terms each.
+struct Terms<const N: usize> {
+    t: [f64; N],
+    len: usize,
 }
 
-/// Sign (-1, 0, 1) of the exact sum of `terms`.
-fn exact_sign(terms: &[f64]) -> i32 {
-    let mut e = Vec::with_capacity(terms.len());
-    for &t in terms {
-        grow(&mut e, t);
+impl<const N: usize> Terms<N> {
+    fn new() -> Self {
+        Terms {
+            t: [0.0; N],
+            len: 0,
+        }
     }
-    // the largest-magnitude non-zero component carries the sign
-    match e.last() {
-        Some(&v) if v > 0.0 => 1,
-        Some(&v) if v < 0.0 => -1,
-        _ => 0,
+
+    fn push(&mut self, x: f64) {
+        self.t[self.len] = x;
+        self.len += 1;
+    }
+
+    /// Sign (-1, 0, 1) of the exact sum of the terms: each is added to a non-overlapping
+    /// expansion of increasing magnitude (Shewchuk's GROW-EXPANSION, zero components dropped),
+    /// whose largest component then carries the sign.
+    fn sign(&self) -> i32 {
+        let mut e = [0.0; N];
+        let mut len = 0;
+        for &b in &self.t[..self.len] {
+            let mut q = b;
+            let mut k = 0;
+            for i in 0..len {
+                let (s, err) = two_sum(q, e[i]);
+                q = s;
+                if err != 0.0 {
+                    e[k] = err;
+                    k += 1;
+                }
+            }
+            if q != 0.0 {
+                e[k] = q;
+                k += 1;
+            }
+            len = k;
+        }
+        match e[..len].last() {
+            Some(&v) if v > 0.0 => 1,
+            Some(&v) if v < 0.0 => -1,
+            _ => 0,
+        }
+    }
+
+    /// Pushes the exact terms of `sign × u × v × w` (each factor a two-term sum).
+    fn push_product(&mut self, sign: f64, u: [f64; 2], v: [f64; 2], w: [f64; 2]) {
+        for ui in u {
+            for vj in v {
+                let (p, e) = two_product(ui, vj);
+                for x in [p, e] {
+                    for wk in w {
+                        let (q, f) = two_product(x, wk);
+                        self.push(sign * q);
+                        self.push(sign * f);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Pushes the exact terms of `sign × u × v` for two-term factors (8 terms).
+    fn push_product2(&mut self, sign: f64, u: [f64; 2], v: [f64; 2]) {
+        for ui in u {
+            for vj in v {
+                let (p, e) = two_product(ui, vj);
+                self.push(sign * p);
+                self.push(sign * e);
+            }
+        }
+    }
+
+    /// Pushes the exact terms of `sign × u × v × w` for single numbers (4 terms).
+    fn push_product1(&mut self, sign: f64, u: f64, v: f64, w: f64) {
+        let (p, e) = two_product(u, v);
+        for x in [p, e] {
+            let (q, f) = two_product(x, w);
+            self.push(sign * q);
+            self.push(sign * f);
+        }
     }
 }
 
@@ -56,22 +126,6 @@ fn exact_sign(terms: &[f64]) -> i32 {
 fn diff(a: f64, b: f64) -> [f64; 2] {
     let (s, e) = two_sum(a, -b);
     [s, e]
-}
-
-/// Pushes the exact terms of `sign × u × v × w` (each factor a two-term sum).
-fn push_product(out: &mut Vec<f64>, sign: f64, u: [f64; 2], v: [f64; 2], w: [f64; 2]) {
-    for ui in u {
-        for vj in v {
-            let (p, e) = two_product(ui, vj);
-            for x in [p, e] {
-                for wk in w {
-                    let (q, f) = two_product(x, wk);
-                    out.push(sign * q);
-                    out.push(sign * f);
-                }
-            }
-        }
-    }
 }
 
 /// Sign of `det[a-d; b-d; c-d]`: positive when `d` lies below the plane through `a, b, c`
@@ -99,14 +153,50 @@ pub fn orient3d(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> i32 {
     let [adx, ady, adz] = [diff(a.x, d.x), diff(a.y, d.y), diff(a.z, d.z)];
     let [bdx, bdy, bdz] = [diff(b.x, d.x), diff(b.y, d.y), diff(b.z, d.z)];
     let [cdx, cdy, cdz] = [diff(c.x, d.x), diff(c.y, d.y), diff(c.z, d.z)];
-    let mut t = Vec::with_capacity(192);
-    push_product(&mut t, 1.0, adx, bdy, cdz);
-    push_product(&mut t, -1.0, adx, bdz, cdy);
-    push_product(&mut t, 1.0, bdx, cdy, adz);
-    push_product(&mut t, -1.0, bdx, cdz, ady);
-    push_product(&mut t, 1.0, cdx, ady, bdz);
-    push_product(&mut t, -1.0, cdx, adz, bdy);
-    exact_sign(&t)
+    let diffs = [adx, ady, adz, bdx, bdy, bdz, cdx, cdy, cdz];
+    if diffs.iter().all(|d| d[1] == 0.0) {
+        // the differences are exact (as they are between the nearby points of a mesh): six
+        // products of three numbers, 24 terms
+        let [adx, ady, adz, bdx, bdy, bdz, cdx, cdy, cdz] = diffs.map(|d| d[0]);
+        if [adx, bdx, cdx] == [0.0; 3] || [ady, bdy, cdy] == [0.0; 3] || [adz, bdz, cdz] == [0.0; 3]
+        {
+            // a zero column: the points lie in a plane normal to an axis
+            return 0;
+        }
+        let mut t = Terms::<24>::new();
+        t.push_product1(1.0, adx, bdy, cdz);
+        t.push_product1(-1.0, adx, bdz, cdy);
+        t.push_product1(1.0, bdx, cdy, adz);
+        t.push_product1(-1.0, bdx, cdz, ady);
+        t.push_product1(1.0, cdx, ady, bdz);
+        t.push_product1(-1.0, cdx, adz, bdy);
+        return t.sign();
+    }
+    let mut t = Terms::<192>::new();
+    orient3d_terms(&mut t, adx, ady, adz, bdx, bdy, bdz, cdx, cdy, cdz);
+    t.sign()
+}
+
+/// [`orient3d`]'s determinant from two-term differences, as 192 exact terms.
+#[allow(clippy::too_many_arguments)]
+fn orient3d_terms(
+    t: &mut Terms<192>,
+    adx: [f64; 2],
+    ady: [f64; 2],
+    adz: [f64; 2],
+    bdx: [f64; 2],
+    bdy: [f64; 2],
+    bdz: [f64; 2],
+    cdx: [f64; 2],
+    cdy: [f64; 2],
+    cdz: [f64; 2],
+) {
+    t.push_product(1.0, adx, bdy, cdz);
+    t.push_product(-1.0, adx, bdz, cdy);
+    t.push_product(1.0, bdx, cdy, adz);
+    t.push_product(-1.0, bdx, cdz, ady);
+    t.push_product(1.0, cdx, ady, bdz);
+    t.push_product(-1.0, cdx, adz, bdy);
 }
 
 /// Sign of `det[a-c; b-c]` for 2D points `[x, y]`: positive when `a, b, c` turn
@@ -124,11 +214,28 @@ pub fn orient2d(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> i32 {
     if !det.is_finite() {
         return 0;
     }
-    let one = [1.0, 0.0];
-    let mut t = Vec::with_capacity(32);
-    push_product(&mut t, 1.0, diff(a[0], c[0]), diff(b[1], c[1]), one);
-    push_product(&mut t, -1.0, diff(a[1], c[1]), diff(b[0], c[0]), one);
-    exact_sign(&t)
+    let [acx, acy, bcx, bcy] = [
+        diff(a[0], c[0]),
+        diff(a[1], c[1]),
+        diff(b[0], c[0]),
+        diff(b[1], c[1]),
+    ];
+    let mut t = Terms::<16>::new();
+    if [acx, acy, bcx, bcy].iter().all(|d| d[1] == 0.0) {
+        // exact differences: a zero column means three points on a line normal to an axis
+        if (acx[0] == 0.0 && bcx[0] == 0.0) || (acy[0] == 0.0 && bcy[0] == 0.0) {
+            return 0;
+        }
+        let (p, e) = two_product(acx[0], bcy[0]);
+        let (q, f) = two_product(acy[0], bcx[0]);
+        for x in [p, e, -q, -f] {
+            t.push(x);
+        }
+        return t.sign();
+    }
+    t.push_product2(1.0, acx, bcy);
+    t.push_product2(-1.0, acy, bcx);
+    t.sign()
 }
 
 #[cfg(test)]
@@ -144,6 +251,23 @@ mod tests {
         assert_eq!(orient3d(a, b, c, Vec3::new(0.3, 0.7, 0.0)), 0);
         assert_eq!(orient2d([0.0, 0.0], [1.0, 0.0], [0.0, 1.0]), 1);
         assert_eq!(orient2d([0.0, 0.0], [1.0, 1.0], [2.0, 2.0]), 0);
+        // points on a line or in a plane normal to an axis (a flat sheet), and one just off it
+        let y = 0.52;
+        assert_eq!(orient2d([0.3, 0.1], [0.3, 0.7], [0.3, 0.2]), 0);
+        assert_eq!(orient2d([0.1, y], [0.7, y], [0.2, y]), 0);
+        assert_eq!(orient2d([0.1, y], [0.7, y], [0.2, y.next_up()]), 1);
+        let (p, q, r) = (
+            Vec3::new(0.1, y, 0.3),
+            Vec3::new(0.7, y, 0.2),
+            Vec3::new(0.4, y, 0.9),
+        );
+        assert_eq!(orient3d(p, q, r, Vec3::new(-0.3, y, 0.05)), 0);
+        let above = orient3d(p, q, r, Vec3::new(-0.3, y.next_up(), 0.05));
+        assert_eq!(
+            above,
+            -orient3d(q, p, r, Vec3::new(-0.3, y.next_up(), 0.05))
+        );
+        assert_ne!(above, 0);
     }
 
     #[test]
@@ -172,6 +296,70 @@ mod tests {
         // sign must agree with the exact determinant of (p, p+u, p+v, d) — check antisymmetry
         assert_eq!(s, -orient3d(p + u, p, p + v, d));
         assert_eq!(s, orient3d(p + u, p + v, p, d));
+    }
+
+    /// The integer determinant `det[a-d; b-d; c-d]`, exactly.
+    fn integer_det(p: [[i64; 3]; 4]) -> i64 {
+        let [a, b, c, d] = p;
+        let r = |u: [i64; 3]| [u[0] - d[0], u[1] - d[1], u[2] - d[2]];
+        let (u, v, w) = (r(a), r(b), r(c));
+        u[0] * (v[1] * w[2] - v[2] * w[1])
+            + v[0] * (w[1] * u[2] - w[2] * u[1])
+            + w[0] * (u[1] * v[2] - u[2] * v[1])
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+
+        /// Points of a lattice (integers times a power of two, moved by an offset that keeps
+        /// their differences exact, as a mesh's nearby vertices are): coplanar ones in an oblique
+        /// plane, in a plane normal to an axis (a flat sheet) and off the plane by one lattice
+        /// step; the sign is the integer determinant's (the exact-difference path), and that of
+        /// the general 192-term sum.
+        #[test]
+        fn orient3d_of_lattice_points_is_the_integer_determinants_sign(
+            u in prop::array::uniform3(-9i64..10), v in prop::array::uniform3(-9i64..10),
+            ij in prop::array::uniform4(-30i64..30), base in prop::array::uniform3(-500i64..500),
+            lift in -1i64..2, axis in 0usize..4, scale in -30i32..-12, offset in 0.5..0.75f64,
+        ) {
+            let mut u = u;
+            let mut v = v;
+            if axis < 3 {
+                // a plane normal to an axis
+                u[axis] = 0;
+                v[axis] = 0;
+            }
+            let point = |k: usize| -> [i64; 3] {
+                let (i, j) = (ij[k % 4], ij[(k + 1) % 4] - ij[(k + 2) % 4]);
+                let mut p = [0; 3];
+                for q in 0..3 {
+                    p[q] = base[q] + i * u[q] + j * v[q];
+                }
+                p
+            };
+            let mut pts = [point(0), point(1), point(2), point(3)];
+            pts[3][(axis + 1) % 3] += lift;
+            // |p| < 1100 and h <= 2^-13 keep the coordinates in [0.25, 1): there they are
+            // exact (multiples of 2^-54 at least) and so are their differences (Sterbenz)
+            let h = 2f64.powi(scale);
+            let at = |p: [i64; 3]| Vec3::new(
+                offset + p[0] as f64 * h, offset + p[1] as f64 * h, offset + p[2] as f64 * h);
+            let [a, b, c, d] = pts.map(at);
+            let want = integer_det(pts).signum() as i32;
+            prop_assert_eq!(orient3d(a, b, c, d), want);
+            let mut t = Terms::<192>::new();
+            let [adx, ady, adz] = [diff(a.x, d.x), diff(a.y, d.y), diff(a.z, d.z)];
+            let [bdx, bdy, bdz] = [diff(b.x, d.x), diff(b.y, d.y), diff(b.z, d.z)];
+            let [cdx, cdy, cdz] = [diff(c.x, d.x), diff(c.y, d.y), diff(c.z, d.z)];
+            orient3d_terms(&mut t, adx, ady, adz, bdx, bdy, bdz, cdx, cdy, cdz);
+            prop_assert_eq!(t.sign(), want);
+            // orient2d on two of the coordinates
+            let (k, l) = ((axis + 1) % 3, (axis + 2) % 3);
+            let flat = |p: Vec3| [p.to_array()[k], p.to_array()[l]];
+            let [pa, pb, pc] = [pts[0], pts[1], pts[3]];
+            let det2 = (pa[k] - pc[k]) * (pb[l] - pc[l]) - (pa[l] - pc[l]) * (pb[k] - pc[k]);
+            prop_assert_eq!(orient2d(flat(a), flat(b), flat(d)), det2.signum() as i32);
+        }
     }
 
     proptest! {
