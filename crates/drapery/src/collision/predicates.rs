@@ -164,39 +164,30 @@ pub fn orient3d(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> i32 {
             return 0;
         }
         let mut t = Terms::<24>::new();
-        t.push_product1(1.0, adx, bdy, cdz);
-        t.push_product1(-1.0, adx, bdz, cdy);
-        t.push_product1(1.0, bdx, cdy, adz);
-        t.push_product1(-1.0, bdx, cdz, ady);
-        t.push_product1(1.0, cdx, ady, bdz);
-        t.push_product1(-1.0, cdx, adz, bdy);
+        for (sign, u, v, w) in expansion_by_minors([adx, ady, adz, bdx, bdy, bdz, cdx, cdy, cdz]) {
+            t.push_product1(sign, u, v, w);
+        }
         return t.sign();
     }
     let mut t = Terms::<192>::new();
-    orient3d_terms(&mut t, adx, ady, adz, bdx, bdy, bdz, cdx, cdy, cdz);
+    for (sign, u, v, w) in expansion_by_minors(diffs) {
+        t.push_product(sign, u, v, w);
+    }
     t.sign()
 }
 
-/// [`orient3d`]'s determinant from two-term differences, as 192 exact terms.
-#[allow(clippy::too_many_arguments)]
-fn orient3d_terms(
-    t: &mut Terms<192>,
-    adx: [f64; 2],
-    ady: [f64; 2],
-    adz: [f64; 2],
-    bdx: [f64; 2],
-    bdy: [f64; 2],
-    bdz: [f64; 2],
-    cdx: [f64; 2],
-    cdy: [f64; 2],
-    cdz: [f64; 2],
-) {
-    t.push_product(1.0, adx, bdy, cdz);
-    t.push_product(-1.0, adx, bdz, cdy);
-    t.push_product(1.0, bdx, cdy, adz);
-    t.push_product(-1.0, bdx, cdz, ady);
-    t.push_product(1.0, cdx, ady, bdz);
-    t.push_product(-1.0, cdx, adz, bdy);
+/// The six signed products of the 3×3 determinant of rows `(a, b, c)`, given as
+/// `[ax, ay, az, bx, by, bz, cx, cy, cz]`.
+fn expansion_by_minors<F: Copy>(d: [F; 9]) -> [(f64, F, F, F); 6] {
+    let [ax, ay, az, bx, by, bz, cx, cy, cz] = d;
+    [
+        (1.0, ax, by, cz),
+        (-1.0, ax, bz, cy),
+        (1.0, bx, cy, az),
+        (-1.0, bx, cz, ay),
+        (1.0, cx, ay, bz),
+        (-1.0, cx, az, by),
+    ]
 }
 
 /// Sign of `det[a-c; b-c]` for 2D points `[x, y]`: positive when `a, b, c` turn
@@ -347,11 +338,16 @@ mod tests {
             let [a, b, c, d] = pts.map(at);
             let want = integer_det(pts).signum() as i32;
             prop_assert_eq!(orient3d(a, b, c, d), want);
+            // the general 192-term sum
             let mut t = Terms::<192>::new();
-            let [adx, ady, adz] = [diff(a.x, d.x), diff(a.y, d.y), diff(a.z, d.z)];
-            let [bdx, bdy, bdz] = [diff(b.x, d.x), diff(b.y, d.y), diff(b.z, d.z)];
-            let [cdx, cdy, cdz] = [diff(c.x, d.x), diff(c.y, d.y), diff(c.z, d.z)];
-            orient3d_terms(&mut t, adx, ady, adz, bdx, bdy, bdz, cdx, cdy, cdz);
+            let mut ds = Vec::new();
+            for (p, q) in [(a, d), (b, d), (c, d)] {
+                ds.extend([diff(p.x, q.x), diff(p.y, q.y), diff(p.z, q.z)]);
+            }
+            let ds: [[f64; 2]; 9] = ds.try_into().unwrap();
+            for (sign, u, v, w) in expansion_by_minors(ds) {
+                t.push_product(sign, u, v, w);
+            }
             prop_assert_eq!(t.sign(), want);
             // orient2d on two of the coordinates
             let (k, l) = ((axis + 1) % 3, (axis + 2) % 3);
