@@ -150,21 +150,17 @@ pub fn orient3d(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> i32 {
     if !det.is_finite() {
         return 0;
     }
-    let [adx, ady, adz] = [diff(a.x, d.x), diff(a.y, d.y), diff(a.z, d.z)];
-    let [bdx, bdy, bdz] = [diff(b.x, d.x), diff(b.y, d.y), diff(b.z, d.z)];
-    let [cdx, cdy, cdz] = [diff(c.x, d.x), diff(c.y, d.y), diff(c.z, d.z)];
-    let diffs = [adx, ady, adz, bdx, bdy, bdz, cdx, cdy, cdz];
+    let diffs = differences(a, b, c, d);
     if diffs.iter().all(|d| d[1] == 0.0) {
         // the differences are exact (as they are between the nearby points of a mesh): six
         // products of three numbers, 24 terms
-        let [adx, ady, adz, bdx, bdy, bdz, cdx, cdy, cdz] = diffs.map(|d| d[0]);
-        if [adx, bdx, cdx] == [0.0; 3] || [ady, bdy, cdy] == [0.0; 3] || [adz, bdz, cdz] == [0.0; 3]
-        {
+        let e = diffs.map(|d| d[0]);
+        if (0..3).any(|k| [e[k], e[k + 3], e[k + 6]] == [0.0; 3]) {
             // a zero column: the points lie in a plane normal to an axis
             return 0;
         }
         let mut t = Terms::<24>::new();
-        for (sign, u, v, w) in expansion_by_minors([adx, ady, adz, bdx, bdy, bdz, cdx, cdy, cdz]) {
+        for (sign, u, v, w) in expansion_by_minors(e) {
             t.push_product1(sign, u, v, w);
         }
         return t.sign();
@@ -174,6 +170,16 @@ pub fn orient3d(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> i32 {
         t.push_product(sign, u, v, w);
     }
     t.sign()
+}
+
+/// `[a - d, b - d, c - d]` coordinate by coordinate (`[adx, ady, adz, bdx, ...]`), each as an
+/// exact two-term sum.
+fn differences(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> [[f64; 2]; 9] {
+    let [a, b, c, d] = [a, b, c, d].map(|p| p.to_array());
+    std::array::from_fn(|k| {
+        let row = [a, b, c][k / 3];
+        diff(row[k % 3], d[k % 3])
+    })
 }
 
 /// The six signed products of the 3×3 determinant of rows `(a, b, c)`, given as
@@ -340,12 +346,7 @@ mod tests {
             prop_assert_eq!(orient3d(a, b, c, d), want);
             // the general 192-term sum
             let mut t = Terms::<192>::new();
-            let mut ds = Vec::new();
-            for (p, q) in [(a, d), (b, d), (c, d)] {
-                ds.extend([diff(p.x, q.x), diff(p.y, q.y), diff(p.z, q.z)]);
-            }
-            let ds: [[f64; 2]; 9] = ds.try_into().unwrap();
-            for (sign, u, v, w) in expansion_by_minors(ds) {
+            for (sign, u, v, w) in expansion_by_minors(differences(a, b, c, d)) {
                 t.push_product(sign, u, v, w);
             }
             prop_assert_eq!(t.sign(), want);

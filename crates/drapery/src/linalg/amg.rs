@@ -419,9 +419,7 @@ impl Multigrid {
     fn build(&mut self, a: &BlockMatrix, s: &[Mat3], bound: bool) {
         self.levels.clear();
         let mut fine = Level::new(a.clone());
-        numeric::filter_matrix(a, s, None, &mut fine.a, &mut fine.sym);
-        self.fine_filter.clear();
-        self.fine_filter.extend_from_slice(s);
+        numeric::filter_fine(&mut fine, &mut self.fine_filter, a, s);
         self.levels.push(fine);
         loop {
             let l = self.levels.len() - 1;

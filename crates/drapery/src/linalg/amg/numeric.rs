@@ -15,10 +15,7 @@ const ROWS: usize = 128;
 /// Recomputes every value for a new matrix of the same pattern (the smoothers damped by a
 /// bound of `ρ` when `bound` is set, see [`smoother`]).
 pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3], bound: bool) {
-    let fine = &mut mg.levels[0];
-    filter_matrix(a, s, None, &mut fine.a, &mut fine.sym);
-    mg.fine_filter.clear();
-    mg.fine_filter.extend_from_slice(s);
+    filter_fine(&mut mg.levels[0], &mut mg.fine_filter, a, s);
     let params = mg.params;
     for l in 0..mg.levels.len() {
         let (head, tail) = mg.levels.split_at_mut(l + 1);
@@ -54,14 +51,20 @@ pub(super) fn refresh_fine(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3]) {
         diagonal_inverses_of(fine, Some(&changed));
         mg.fine_filter.copy_from_slice(s);
     } else {
-        filter_matrix(a, s, None, &mut fine.a, &mut fine.sym);
+        filter_fine(fine, &mut mg.fine_filter, a, s);
         diagonal_inverses(fine);
-        mg.fine_filter.clear();
-        mg.fine_filter.extend_from_slice(s);
     }
     if mg.levels.len() == 1 {
         cycle::factor_coarsest(mg);
     }
+}
+
+/// The finest level's filtered matrix for `a` and `s`, every row ([`filter_matrix`]), with `s`
+/// kept in `kept` as the filter it was computed with ([`refresh_fine`] compares with it).
+pub(super) fn filter_fine(fine: &mut Level, kept: &mut Vec<Mat3>, a: &BlockMatrix, s: &[Mat3]) {
+    filter_matrix(a, s, None, &mut fine.a, &mut fine.sym);
+    kept.clear();
+    kept.extend_from_slice(s);
 }
 
 /// The bits of a block's entries.
@@ -73,7 +76,7 @@ fn bits(m: &Mat3) -> [u64; 9] {
 /// pattern of `a`), and its upper triangle into `upper` in the same pass. With `changed`,
 /// only the rows of the particles it marks and of their neighbours are written (the others
 /// are left as they are).
-pub(super) fn filter_matrix(
+fn filter_matrix(
     a: &BlockMatrix,
     s: &[Mat3],
     changed: Option<&[bool]>,
