@@ -7,12 +7,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
-/// mimalloc keeps the memory a step frees for the next one; the system allocator returned
-/// the large per-step arrays to the kernel and faulted them in again, about 50 000 page faults
-/// per spin-290 step (BENCHMARKS.md, twenty-third session). Results are the same bits.
-#[global_allocator]
-static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
-
+mod allocator;
 mod bench;
 mod check;
 mod colliders;
@@ -47,6 +42,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    allocator::keep_freed_memory();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(args) => run::run(args).map(|()| true),
