@@ -6,7 +6,7 @@
 //! - mimalloc still hands memory that stays free for a while (its option `purge_delay`, 1 s by
 //!   default in mimalloc 3) back to the system. A spin-290 step frees and allocates the same
 //!   large arrays about once a second, so a run of 60 steps still took 370 000–430 000 page
-//!   faults and 5.6–7.6 s of system time. [`keep_freed_memory`] turns the purge off (BENCHMARKS.md,
+//!   faults and 5.6–8.0 s of system time. [`keep_freed_memory`] turns the purge off (BENCHMARKS.md,
 //!   twenty-fifth session).
 //!
 //! The results are the same bits whatever the allocator. The library sets no allocator
@@ -17,7 +17,7 @@ use std::ffi::{c_int, c_long};
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
-// mimalloc's C interface (linked by the `mimalloc` crate; docs/mimalloc.h of mimalloc 3)
+// mimalloc's C interface (linked by the `mimalloc` crate; include/mimalloc.h of mimalloc 3)
 unsafe extern "C" {
     fn mi_version() -> c_int;
     #[cfg(test)]
