@@ -8,7 +8,8 @@
 //! `free`, of the same cloth without collisions, `spin-free-N`), printing each step's counts
 //! and their sums, then each stage's mean ms per step over the steps after the first (the
 //! first after a restore also builds the collision trees and the multigrid's structure from
-//! scratch) and their total. Under `valgrind --tool=callgrind` (with `RAYON_NUM_THREADS=1`)
+//! scratch) and their total, and last the end state's FNV-1a fingerprint (the same for a
+//! change that only makes the step faster). Under `valgrind --tool=callgrind` (with `RAYON_NUM_THREADS=1`)
 //! the second form counts the instructions of STEPS steps from the same state (building the
 //! model and reading FILE are the rest: subtract a run of 0 steps).
 //!
@@ -332,6 +333,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ms.join(" "),
                 1e3 * total / timed as f64
             );
+            // the end state's fingerprint: a change that only makes the step faster keeps it
+            let bytes = sim.snapshot().to_bytes();
+            let state = drapery::fingerprint::Fnv::new().bytes(&bytes).finish();
+            println!("state {state:016x}");
         }
         _ => return Err(usage.into()),
     }

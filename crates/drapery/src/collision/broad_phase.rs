@@ -153,18 +153,12 @@ impl<'a> SweptBoxes<'a> {
     ) -> SweptBoxes<'a> {
         let r = 0.5 * margin.max(0.0);
         let boxes = |idx: &[u32]| MovingBox::of(idx, x0, x1, r);
-        let each = |n: usize, f: &(dyn Fn(u32) -> MovingBox + Sync)| -> Vec<MovingBox> {
-            (0..n as u32)
-                .into_par_iter()
-                .with_min_len(1024)
-                .map(f)
-                .collect()
-        };
-        let [mut vertices, mut tris, mut edge_tree] = cache.trees([
-            each(x0.len(), &|v| boxes(&[v])),
-            each(triangles.len(), &|t| boxes(&triangles[t as usize])),
-            each(edges.len(), &|e| boxes(&edges[e as usize])),
-        ]);
+        let [mut vertices, mut tris, mut edge_tree] = cache.trees(
+            [x0.len(), triangles.len(), edges.len()],
+            [&|v| boxes(&[v]), &|t| boxes(&triangles[t as usize]), &|e| {
+                boxes(&edges[e as usize])
+            }],
+        );
         // pairs that share a vertex are never candidates
         vertices.set_vertices(|v| [v; 3]);
         tris.set_vertices(|t| triangles[t as usize]);

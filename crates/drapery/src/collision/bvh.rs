@@ -151,23 +151,36 @@ impl TreeCache {
     /// Uses of one set of orders.
     pub const REUSE: usize = 64;
 
-    /// The trees of `boxes` (one list per tree, built side by side), on the kept orders where
-    /// they fit.
-    pub fn trees(&mut self, boxes: [Vec<MovingBox>; 3]) -> [Bvh; 3] {
+    /// The trees of primitives `0..counts[k]` with boxes `boxes[k]` (built side by side), on
+    /// the kept orders where they fit (the boxes are then computed in leaf order, straight
+    /// into the tree).
+    pub fn trees(
+        &mut self,
+        counts: [usize; 3],
+        boxes: [&(dyn Fn(u32) -> MovingBox + Sync); 3],
+    ) -> [Bvh; 3] {
         let fits = self.orders.len() == 3
             && self.uses < Self::REUSE
-            && self
-                .orders
-                .iter()
-                .zip(&boxes)
-                .all(|(o, b)| o.len() == b.len());
-        let [a, b, c] = boxes;
+            && self.orders.iter().zip(counts).all(|(o, n)| o.len() == n);
         let orders = std::mem::take(&mut self.orders);
-        let tree = |k: usize, b: Vec<MovingBox>| match fits {
-            true => Bvh::with_order(orders[k].clone(), &b),
-            false => Bvh::new(b),
+        let [o0, o1, o2]: [Vec<u32>; 3] = match fits {
+            true => orders.try_into().unwrap_or_default(),
+            false => Default::default(),
         };
-        let (a, (b, c)) = rayon::join(|| tree(0, a), || rayon::join(|| tree(1, b), || tree(2, c)));
+        let tree = |k: usize, order: Vec<u32>| match fits {
+            true => Bvh::from_order(order, boxes[k]),
+            false => Bvh::new(
+                (0..counts[k] as u32)
+                    .into_par_iter()
+                    .with_min_len(1024)
+                    .map(boxes[k])
+                    .collect(),
+            ),
+        };
+        let (a, (b, c)) = rayon::join(
+            || tree(0, o0),
+            || rayon::join(|| tree(1, o1), || tree(2, o2)),
+        );
         self.uses = if fits { self.uses + 1 } else { 1 };
         self.orders = vec![a.order.clone(), b.order.clone(), c.order.clone()];
         [a, b, c]
@@ -216,10 +229,15 @@ impl Bvh {
     /// The hierarchy of the given primitive boxes grown on `order` (a permutation of the
     /// primitives: the leaf order of an earlier tree of the same primitives).
     pub fn with_order(order: Vec<u32>, boxes: &[MovingBox]) -> Bvh {
+        Bvh::from_order(order, |i| boxes[i as usize])
+    }
+
+    /// [`Bvh::with_order`] with primitive `i`'s box `boxes(i)`, computed in leaf order.
+    pub fn from_order(order: Vec<u32>, boxes: impl Fn(u32) -> MovingBox + Sync) -> Bvh {
         let prims: Vec<MovingBox> = order
             .par_iter()
             .with_min_len(1024)
-            .map(|&i| boxes[i as usize])
+            .map(|&i| boxes(i))
             .collect();
         let mut t = Bvh {
             order,

@@ -157,6 +157,37 @@ fn stuck_message(ids: &[u32; 4], n: usize, pinned: &[bool]) -> String {
     )
 }
 
+/// Pairs per task of [`scan`].
+const SCAN_PAIRS: usize = 4096;
+
+/// Runs `f` on every pair in parallel: the hits it returns (in any order) and the pairs it
+/// marks, in the order of `pairs`.
+fn scan<H: Send>(
+    pairs: &[(u32, u32)],
+    f: impl Fn((u32, u32)) -> (Option<H>, bool) + Sync,
+) -> (Vec<H>, Vec<(u32, u32)>) {
+    let parts: Vec<(Vec<H>, Vec<(u32, u32)>)> = pairs
+        .par_chunks(SCAN_PAIRS)
+        .map(|chunk| {
+            let (mut hits, mut marked) = (Vec::new(), Vec::with_capacity(chunk.len()));
+            for &p in chunk {
+                let (hit, mark) = f(p);
+                hits.extend(hit);
+                if mark {
+                    marked.push(p);
+                }
+            }
+            (hits, marked)
+        })
+        .collect();
+    let mut out = (Vec::new(), Vec::with_capacity(pairs.len()));
+    for (h, m) in parts {
+        out.0.extend(h);
+        out.1.extend(m);
+    }
+    out
+}
+
 /// Makes the end-of-step positions `x1` free of crossings (see the module docs), letting
 /// through the contact pairs for which `exempt` is true (those within a stitched neighbourhood,
 /// so that seams can close, [`super::seams::Seams::exempt`]; starting tangles). Pair particles
@@ -307,29 +338,36 @@ pub fn failsafe(
     let mut boxes = SweptBoxes::cached(&ys0, &ye, &tris, &all_edges, margin, cache);
     report.builds += 1;
     let first = boxes.all();
-    let mut hits = all_hits(&first, &ye);
+    // the first round's hits, and (used when there are none) the cloth's own pairs (cloth
+    // vertices, triangles and edges come first) whose boxes at the end positions meet with the
+    // thickness as margin: the static broad phase's pairs there, in the same order. The moving
+    // boxes of cloth carried along (by a spinning obstacle, say) meet over several edge lengths,
+    // and most of those pairs end far apart. One pass for both, so that each pair's positions
+    // are read once.
+    let (nt, ne) = (triangles.len() as u32, edges.len() as u32);
+    let near = |a: &[u32], b: &[u32]| {
+        let r = 0.5 * margin;
+        MovingBox::of(a, &ye, &ye, r).meets(&MovingBox::of(b, &ye, &ye, r))
+    };
+    let (vt_hits, vt_near) = scan(&first.vt, |(v, t)| {
+        let tri = &tris[t as usize];
+        let hit = meet(&[v], tri, &ye)
+            .then(|| impact(vt_ids(v, t), true, &ye).map(|h| ((0, v, t), h)))
+            .flatten();
+        (hit, (v as usize) < n && t < nt && near(&[v], tri))
+    });
+    let (ee_hits, ee_near) = scan(&first.ee, |(a, b)| {
+        let (e, f) = (&all_edges[a as usize], &all_edges[b as usize]);
+        let hit = meet(e, f, &ye)
+            .then(|| impact(ee_ids(a, b), false, &ye).map(|h| ((1, a, b), h)))
+            .flatten();
+        (hit, b < ne && near(e, f))
+    });
+    let mut hits: Hits = vt_hits.into_iter().chain(ee_hits).collect();
     if hits.is_empty() {
-        // the cloth's own pairs (cloth vertices, triangles and edges come first) whose boxes
-        // at the end positions meet with the thickness as margin: the static broad phase's
-        // pairs there, in the same order. The moving boxes of cloth carried along (by a
-        // spinning obstacle, say) meet over several edge lengths, and most of those pairs
-        // end far apart.
-        let (nt, ne) = (triangles.len() as u32, edges.len() as u32);
-        let near = |a: &[u32], b: &[u32]| {
-            MovingBox::of(a, &ye, &ye, 0.5 * margin).meets(&MovingBox::of(
-                b,
-                &ye,
-                &ye,
-                0.5 * margin,
-            ))
-        };
         report.pairs = Some(Candidates {
-            vt: (first.vt.par_iter().copied())
-                .filter(|&(v, t)| (v as usize) < n && t < nt && near(&[v], &tris[t as usize]))
-                .collect(),
-            ee: (first.ee.par_iter().copied())
-                .filter(|&(a, b)| b < ne && near(&all_edges[a as usize], &all_edges[b as usize]))
-                .collect(),
+            vt: vt_near,
+            ee: ee_near,
         });
     }
     drop(first);
