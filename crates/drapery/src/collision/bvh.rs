@@ -94,6 +94,7 @@ impl MovingBox {
 
     /// False when, on some axis, the two boxes cannot overlap at any time of the step (the
     /// difference of their positions, `p + t q`, keeps one sign on that axis over `t ∈ [0, 1]`).
+    #[inline]
     pub fn may_meet(&self, o: &MovingBox) -> bool {
         // (false for NaN: an empty box meets nothing)
         let axis =

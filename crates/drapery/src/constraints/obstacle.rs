@@ -184,10 +184,14 @@ impl ActiveSet {
     /// After a solve: each candidate's normal impulse `n·(A dv - rhs)` (scaled by `1/h`, the
     /// force the constraint exerted), from the candidates' rows of `A dv` only.
     pub fn measure(&mut self, a: Split, rhs: &[Vec3], dv: &[Vec3]) {
-        for (ct, l) in self.candidates.iter().zip(self.impulse.iter_mut()) {
-            let i = ct.particle as usize;
-            *l = ct.normal.dot(a.row_product(i, dv) - rhs[i]);
-        }
+        self.candidates
+            .par_iter()
+            .zip(self.impulse.par_iter_mut())
+            .with_min_len(256)
+            .for_each(|(ct, l)| {
+                let i = ct.particle as usize;
+                *l = ct.normal.dot(a.row_product(i, dv) - rhs[i]);
+            });
     }
 
     /// Flips held contacts that pull (beyond a relative `1e-9` of the largest held impulse) and

@@ -153,26 +153,21 @@ pub fn solve_split(
     // Reference residual: the zero guess on the free part (`z` is zero but at the constrained
     // particles, so only the rows that reach one of them are multiplied).
     a.mul_vec_sparse(z, &mut w.q);
-    for i in 0..n {
-        w.r[i] = s[i] * (b[i] - w.q[i]);
-    }
+    filtered_residual(s, b, &w.q, &mut w.r);
     let r0 = dot(&w.r, &w.r).sqrt();
     // x = z + S x_guess
-    for i in 0..n {
-        x[i] = z[i] + s[i] * x[i];
-    }
+    x.par_iter_mut()
+        .enumerate()
+        .with_min_len(CHUNK)
+        .for_each(|(i, xi)| *xi = z[i] + s[i] * *xi);
     if r0 == 0.0 || !r0.is_finite() {
-        for i in 0..n {
-            x[i] = z[i];
-        }
+        x.copy_from_slice(z);
         stats.relative_residual = if r0 == 0.0 { 0.0 } else { f64::NAN };
         stats.converged = r0 == 0.0;
         return stats;
     }
     a.mul_vec(x, &mut w.q);
-    for i in 0..n {
-        w.r[i] = s[i] * (b[i] - w.q[i]);
-    }
+    filtered_residual(s, b, &w.q, &mut w.r);
     let target = settings.tolerance * r0;
     let mut rnorm = dot(&w.r, &w.r).sqrt();
     if rnorm <= target {
@@ -200,6 +195,14 @@ pub fn solve_split(
     stats.relative_residual = rnorm / r0;
     stats.converged = rnorm <= target && rnorm.is_finite();
     stats
+}
+
+/// `r = S (b - q)`, row by row.
+fn filtered_residual(s: &[Mat3], b: &[Vec3], q: &[Vec3], r: &mut [Vec3]) {
+    r.par_iter_mut()
+        .enumerate()
+        .with_min_len(CHUNK)
+        .for_each(|(i, ri)| *ri = s[i] * (b[i] - q[i]));
 }
 
 /// Sets up the preconditioner for `p` filtered by `s`.
