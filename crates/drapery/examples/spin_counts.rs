@@ -9,9 +9,9 @@
 //! and their sums, then each stage's mean ms per step over the steps after the first (the
 //! first after a restore also builds the collision trees and the multigrid's structure from
 //! scratch) and their total, and last the end state's FNV-1a fingerprint (the same for a
-//! change that only makes the step faster). Under `valgrind --tool=callgrind` (with `RAYON_NUM_THREADS=1`)
-//! the second form counts the instructions of STEPS steps from the same state (building the
-//! model and reading FILE are the rest: subtract a run of 0 steps).
+//! change that only makes the step faster). Under `valgrind --tool=callgrind` (with
+//! `RAYON_NUM_THREADS=1`) the second form counts the instructions of STEPS steps from the same
+//! state (building the model and reading FILE are the rest: subtract a run of 0 steps).
 //!
 //! `... -- N trace STEPS FILE` restores FILE (or, with `-` for FILE, starts from the scene's
 //! start) and runs STEPS steps, printing after each the least principal stretch of any
