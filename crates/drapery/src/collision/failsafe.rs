@@ -160,13 +160,16 @@ fn stuck_message(ids: &[u32; 4], n: usize, pinned: &[bool]) -> String {
 /// Pairs per task of [`scan`].
 const SCAN_PAIRS: usize = 4096;
 
+/// What [`scan`] returns: the hits, and the marked pairs in order.
+type Scanned<H> = (Vec<H>, Vec<(u32, u32)>);
+
 /// Runs `f` on every pair in parallel: the hits it returns (in any order) and the pairs it
 /// marks, in the order of `pairs`.
 fn scan<H: Send>(
     pairs: &[(u32, u32)],
     f: impl Fn((u32, u32)) -> (Option<H>, bool) + Sync,
-) -> (Vec<H>, Vec<(u32, u32)>) {
-    let parts: Vec<(Vec<H>, Vec<(u32, u32)>)> = pairs
+) -> Scanned<H> {
+    let parts: Vec<Scanned<H>> = pairs
         .par_chunks(SCAN_PAIRS)
         .map(|chunk| {
             let (mut hits, mut marked) = (Vec::new(), Vec::with_capacity(chunk.len()));
