@@ -319,14 +319,23 @@ pub fn failsafe(
     let meet = |a: &[u32], b: &[u32], ye: &[Vec3]| {
         MovingBox::of(a, &ys0, ye, r).meets(&MovingBox::of(b, &ys0, ye, r))
     };
+    // a candidate's hit, keyed as in `Hits`
+    let vt_hit = |(v, t): (u32, u32), ye: &[Vec3]| {
+        meet(&[v], &tris[t as usize], ye)
+            .then(|| impact(vt_ids(v, t), true, ye).map(|h| ((0, v, t), h)))
+            .flatten()
+    };
+    let ee_hit = |(e, f): (u32, u32), ye: &[Vec3]| {
+        meet(&all_edges[e as usize], &all_edges[f as usize], ye)
+            .then(|| impact(ee_ids(e, f), false, ye).map(|h| ((1, e, f), h)))
+            .flatten()
+    };
     let all_hits = |cand: &Candidates, ye: &[Vec3]| -> Hits {
         let vt: Vec<_> = (cand.vt.par_iter())
-            .filter(|&&(v, t)| meet(&[v], &tris[t as usize], ye))
-            .filter_map(|&(v, t)| impact(vt_ids(v, t), true, ye).map(|h| ((0, v, t), h)))
+            .filter_map(|&p| vt_hit(p, ye))
             .collect();
         let ee: Vec<_> = (cand.ee.par_iter())
-            .filter(|&&(e, f)| meet(&all_edges[e as usize], &all_edges[f as usize], ye))
-            .filter_map(|&(e, f)| impact(ee_ids(e, f), false, ye).map(|h| ((1, e, f), h)))
+            .filter_map(|&p| ee_hit(p, ye))
             .collect();
         vt.into_iter().chain(ee).collect()
     };
@@ -353,18 +362,12 @@ pub fn failsafe(
         MovingBox::of(a, &ye, &ye, r).meets(&MovingBox::of(b, &ye, &ye, r))
     };
     let (vt_hits, vt_near) = scan(&first.vt, |(v, t)| {
-        let tri = &tris[t as usize];
-        let hit = meet(&[v], tri, &ye)
-            .then(|| impact(vt_ids(v, t), true, &ye).map(|h| ((0, v, t), h)))
-            .flatten();
-        (hit, (v as usize) < n && t < nt && near(&[v], tri))
+        let near = (v as usize) < n && t < nt && near(&[v], &tris[t as usize]);
+        (vt_hit((v, t), &ye), near)
     });
     let (ee_hits, ee_near) = scan(&first.ee, |(a, b)| {
-        let (e, f) = (&all_edges[a as usize], &all_edges[b as usize]);
-        let hit = meet(e, f, &ye)
-            .then(|| impact(ee_ids(a, b), false, &ye).map(|h| ((1, a, b), h)))
-            .flatten();
-        (hit, b < ne && near(e, f))
+        let near = b < ne && near(&all_edges[a as usize], &all_edges[b as usize]);
+        (ee_hit((a, b), &ye), near)
     });
     let mut hits: Hits = vt_hits.into_iter().chain(ee_hits).collect();
     if hits.is_empty() {
