@@ -254,24 +254,10 @@ impl Bvh {
 
     /// The same hierarchy (same order and nodes) over new boxes of the same primitives.
     pub fn refit(&self, boxes: impl Fn(u32) -> MovingBox + Sync) -> Bvh {
-        let prims: Vec<MovingBox> = self
-            .order
-            .par_iter()
-            .with_min_len(1024)
-            .map(|&i| boxes(i))
-            .collect();
-        let mut t = Bvh {
-            order: self.order.clone(),
-            prims,
-            nodes: Vec::with_capacity(self.nodes.len()),
-            right: Vec::with_capacity(self.right.len()),
-            marks: None,
+        Bvh {
             vertices: self.vertices.clone(),
-        };
-        if !t.prims.is_empty() {
-            t.grow(0, t.prims.len() as u32);
+            ..Bvh::from_order(self.order.clone(), boxes)
         }
-        t
     }
 
     /// Sets the vertices of each primitive (`of(i)` for primitive `i`; a vertex `[v, v, v]`, an
