@@ -228,7 +228,6 @@ impl Simulation {
         work.solve.resize(n);
         work.dv.resize(n, Vec3::ZERO);
         let (mut x, mut v) = (start.x0.clone(), start.v0.clone());
-        let mut active = ActiveSet::new(contacts.obstacle.clone());
         // where obstacle contact begins (no candidate had a normal force in the previous step)
         // and at an impact, the step is solved to FIRST_CONTACT_TOLERANCE or tighter
         let candidates = &contacts.obstacle;
@@ -247,6 +246,12 @@ impl Simulation {
             ..self.settings
         };
         report.tolerance = solver_settings.tolerance;
+        // the first solve's contacts: those that pushed at the end of the previous step, but
+        // every candidate (less the predicted pulls) where contact begins or at an impact
+        let mut active = match first_contact || impact {
+            true => ActiveSet::new(contacts.obstacle.clone()),
+            false => ActiveSet::continuing(contacts.obstacle.clone(), &self.normal_force),
+        };
         let newton = self.settings.newton_iterations;
         let potential = Potential {
             t0: self.time,

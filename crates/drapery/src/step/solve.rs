@@ -3,9 +3,11 @@
 //!
 //! Each round sets the constraints (pins, then the held obstacle contacts), solves, and lets
 //! the [`ActiveSet`] release contacts that pull and hold again released ones that sink; at most
-//! [`CONTACT_ROUNDS`] solves per iteration, each from the previous one's solution. Before the
-//! first solve of a step, contacts the initial guess (the previous step's velocity change) says
-//! would pull while their particle leaves the surface anyway are released up front. The last
+//! [`CONTACT_ROUNDS`] solves per iteration, each from the previous one's solution. Where
+//! contact goes on, the first solve holds the contacts that pushed at the end of the previous
+//! step ([`ActiveSet::continuing`]). Where it begins, or at an impact, it holds every candidate
+//! but those the initial guess (the previous step's velocity change) says would pull while their
+//! particle leaves the surface anyway, which are released up front. The last
 //! round keeps the contact set its solve used, so friction gets contacts that match the
 //! velocities they come with.
 
@@ -114,7 +116,7 @@ pub(crate) fn on_active_set(
                     });
             }
             set.hold(v, c);
-            if round == 0 && it == 0 && !set.is_empty() {
+            if round == 0 && it == 0 && set.needs_prediction() {
                 set.predict(system.matrix(), rhs, v, dv, c, w);
             }
         });

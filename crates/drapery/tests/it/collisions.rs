@@ -509,6 +509,37 @@ fn a_sheet_resting_on_the_ground_under_upward_gravity_lifts_off_freely_in_one_so
     }
 }
 
+#[test]
+fn a_sheet_resting_on_the_ground_keeps_every_contact_held_in_one_solve_per_step() {
+    // The first step is a first contact (no particle had a normal force): every candidate is
+    // held and none is predicted to pull. Every later step starts from the contacts that
+    // pushed at the end of the previous one, which are all of them again: one solve per step.
+    let thickness = 0.01;
+    let n = 6;
+    let cloth = sheet(
+        "sheet",
+        n,
+        0.3,
+        Vec3::new(0.0, thickness, 0.0),
+        Vec3::Y,
+        Vec3::ZERO,
+    );
+    let collision = CollisionSettings {
+        thickness,
+        ..Default::default()
+    };
+    let mut s = sim(vec![cloth], vec![ground(0.5)], collision);
+    let h = 0.01;
+    for k in 0..20 {
+        let r = s.step(h).unwrap();
+        assert_eq!(r.linear_solves, 1, "step {k}");
+        assert_eq!(r.obstacle_contacts, n * n, "step {k}");
+        for p in s.model().positions() {
+            assert!((p.y - thickness).abs() < 1e-6, "step {k}: {p}");
+        }
+    }
+}
+
 /// `[simulation] preroll`: the cloth falls and settles on a box during the pre-roll while the
 /// box, which moves at 1 m/s from t = 0 on, is held at its pose at 0 (so friction does not drag
 /// the cloth); the clock then reads exactly 0 and the frames start from the settled state.
