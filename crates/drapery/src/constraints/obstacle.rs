@@ -346,16 +346,20 @@ mod tests {
         assert_eq!(impact_energy(&c[2..], &v, &mass, g * h), 0.0);
     }
 
-    #[test]
-    fn a_continuing_set_holds_the_candidates_that_pushed_and_predicts_nothing() {
-        let ct = |i: u32| ObstacleContact {
+    /// A contact of particle `i` against the ground, prescribing no normal velocity.
+    fn ct(i: u32) -> ObstacleContact {
+        ObstacleContact {
             particle: i,
             normal: Vec3::Y,
             normal_velocity: 0.0,
             surface_velocity: Vec3::ZERO,
             friction: 0.0,
             damping: 0.0,
-        };
+        }
+    }
+
+    #[test]
+    fn a_continuing_set_holds_the_candidates_that_pushed_and_predicts_nothing() {
         // particle 3 pushed, 1 had no force, 0 is new (no force either); 2 pushed but is no
         // candidate now
         let force = [0.0, 0.0, 2.0, 0.5];
@@ -375,14 +379,6 @@ mod tests {
 
     #[test]
     fn a_contact_that_pulls_is_released_and_one_that_sinks_is_held_again() {
-        let ct = |i: u32| ObstacleContact {
-            particle: i,
-            normal: Vec3::Y,
-            normal_velocity: 0.0,
-            surface_velocity: Vec3::ZERO,
-            friction: 0.0,
-            damping: 0.0,
-        };
         let mut set = ActiveSet::new(vec![ct(0), ct(1)]);
         // identity matrix: the impulse of a contact is n·(dv - rhs)
         let mut a = crate::linalg::BlockMatrix::from_pairs(2, &[]);
