@@ -143,19 +143,30 @@ impl ActiveSet {
         }
     }
 
-    /// The set that goes on from the previous step: a candidate is held when its particle's
-    /// normal force at the end of that step, `normal_force[particle]`, is positive, and
-    /// released otherwise; no prediction. Where contact goes on, the previous step's set is
-    /// a better first guess than every candidate held and the prediction: on spin-129 the
-    /// rounds then took 4 011 CG iterations over 200 steps instead of 5 554 (BENCHMARKS.md,
-    /// twenty-seventh session). Not where contact begins: there no particle had a normal force
-    /// and every candidate would start released (use [`ActiveSet::new`]).
-    pub fn continuing(candidates: Vec<ObstacleContact>, normal_force: &[f64]) -> ActiveSet {
+    /// The set that goes on from the previous step, no prediction: a candidate is held when
+    /// its particle's normal force at the end of that step, `normal_force[particle]`, is
+    /// positive, or when the first solve's initial guess says it would sink: its velocity
+    /// `v + dv` (`v` the step's start, `dv` the guess, the previous step's change) below the
+    /// prescribed normal velocity by more than `sink_tolerance`, the re-hold test of
+    /// [`ActiveSet::update`]. Where contact goes on, the previous step's set is a better first
+    /// guess than every candidate held and the prediction: on spin-129 the rounds then took
+    /// 4 011 CG iterations over 200 steps instead of 5 554, and the sinking ones held up front
+    /// saved a further solve every second step at 290² (BENCHMARKS.md, twenty-seventh and
+    /// twenty-eighth sessions). Not where contact begins: there no particle had a normal force
+    /// and most candidates would start released (use [`ActiveSet::new`]).
+    pub fn continuing(
+        candidates: Vec<ObstacleContact>,
+        normal_force: &[f64],
+        v: &[Vec3],
+        dv: &[Vec3],
+        sink_tolerance: f64,
+    ) -> ActiveSet {
         let active = (candidates.iter())
             .map(|c| {
-                normal_force
-                    .get(c.particle as usize)
-                    .is_some_and(|&f| f > 0.0)
+                let i = c.particle as usize;
+                let pushed = normal_force.get(i).is_some_and(|&f| f > 0.0);
+                let guess = v[i] + dv.get(i).copied().unwrap_or(Vec3::ZERO);
+                pushed || c.normal.dot(guess) < c.normal_velocity - sink_tolerance
             })
             .collect();
         ActiveSet {
@@ -359,17 +370,33 @@ mod tests {
     }
 
     #[test]
-    fn a_continuing_set_holds_the_candidates_that_pushed_and_predicts_nothing() {
-        // particle 3 pushed, 1 had no force, 0 is new (no force either); 2 pushed but is no
-        // candidate now
-        let force = [0.0, 0.0, 2.0, 0.5];
-        let set = ActiveSet::continuing(vec![ct(3), ct(1), ct(0)], &force);
+    fn a_continuing_set_holds_the_candidates_that_pushed_or_would_sink_and_predicts_nothing() {
+        // particle 3 pushed; 1, 0 and 4 had no force (0 and 4 are new); 2 pushed but is no
+        // candidate now. With the guess `v + dv`, 4 would sink by 2 mm/s, 1 by 0.5 mm/s (within
+        // the 1 mm/s tolerance), and 0 starts sinking but the guess turns it around.
+        let force = [0.0, 0.0, 2.0, 0.5, 0.0];
+        let v = [
+            Vec3::new(0.0, -0.01, 0.0),
+            Vec3::new(0.3, -0.0005, 0.0),
+            Vec3::ZERO,
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(0.0, -0.001, 0.0),
+        ];
+        let dv = [
+            Vec3::new(0.0, 0.02, 0.0),
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::new(0.0, -0.001, 0.0),
+        ];
+        let candidates = vec![ct(3), ct(1), ct(0), ct(4)];
+        let set = ActiveSet::continuing(candidates, &force, &v, &dv, 1e-3);
         assert!(!set.needs_prediction());
-        let mut c = Constraints::free(4);
-        set.hold(&[Vec3::ZERO; 4], &mut c);
+        let mut c = Constraints::free(5);
+        set.hold(&[Vec3::ZERO; 5], &mut c);
         let held: Vec<bool> = c.filter.iter().map(|f| *f != Mat3::IDENTITY).collect();
-        assert_eq!(held, [false, false, false, true]);
-        assert_eq!(set.held().0, vec![ct(3)]);
+        assert_eq!(held, [false, false, false, true, true]);
+        assert_eq!(set.held().0, vec![ct(3), ct(4)]);
         // a new set holds every candidate and is predicted first, unless it is empty
         let fresh = ActiveSet::new(vec![ct(3), ct(1)]);
         assert!(fresh.needs_prediction());

@@ -234,6 +234,8 @@ impl Simulation {
         let first_contact = !candidates.is_empty()
             && (candidates.iter()).all(|c| self.normal_force[c.particle as usize] == 0.0);
         let gh = self.model.gravity.length() * h;
+        // a released contact is held again when it would sink faster than this (m/s)
+        let sink_tolerance = 1e-2 * gh;
         let impact = !candidates.is_empty() && {
             let e = obstacle::impact_energy(candidates, &start.v0, &self.model.mass, gh);
             e > 0.0 && e >= IMPACT_SHARE * start.ke0
@@ -246,11 +248,18 @@ impl Simulation {
             ..self.settings
         };
         report.tolerance = solver_settings.tolerance;
-        // the first solve's contacts: those that pushed at the end of the previous step, but
-        // every candidate (less the predicted pulls) where contact begins or at an impact
+        // the first solve's contacts: those that pushed at the end of the previous step and
+        // those the warm start says would sink, but every candidate (less the predicted pulls)
+        // where contact begins or at an impact
         let mut active = match first_contact || impact {
             true => ActiveSet::new(contacts.obstacle.clone()),
-            false => ActiveSet::continuing(contacts.obstacle.clone(), &self.normal_force),
+            false => ActiveSet::continuing(
+                contacts.obstacle.clone(),
+                &self.normal_force,
+                &start.v0,
+                &self.warm_start,
+                sink_tolerance,
+            ),
         };
         let newton = self.settings.newton_iterations;
         let potential = Potential {
@@ -289,7 +298,7 @@ impl Simulation {
                 rhs: &work.linearized.rhs,
                 warm: &self.warm_start,
                 iteration: it,
-                sink_tolerance: 1e-2 * gh,
+                sink_tolerance,
             };
             solve::on_active_set(
                 &self.system,
