@@ -6,9 +6,9 @@
 //! [`ActiveSet`] decides which candidates are held: a contact whose impulse would pull is
 //! released, a released one whose particle would sink is held again, and the system is solved
 //! again. What the last round holds stays for the step (friction uses those contacts and
-//! impulses); the next step's first solve holds those of them that pushed
-//! ([`ActiveSet::continuing`]), unless contact begins there or it is an impact
-//! ([`ActiveSet::new`] and its prediction).
+//! impulses); the next step's first solve holds those of them that pushed, and the candidates
+//! its initial guess says would sink ([`ActiveSet::continuing`]), unless contact begins there
+//! or it is an impact ([`ActiveSet::new`] and its prediction).
 
 use super::Constraints;
 use crate::collision::settings::Obstacle;
