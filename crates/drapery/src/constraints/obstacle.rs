@@ -143,9 +143,10 @@ impl ActiveSet {
         }
     }
 
-    /// The set that goes on from the previous step, no prediction: a candidate is held when
-    /// its particle's normal force at the end of that step, `normal_force[particle]`, is
-    /// positive, or when the first solve's initial guess says it would sink: its velocity
+    /// The set that goes on from the previous step, without [`ActiveSet::predict`]'s product
+    /// (`needs_prediction` is false): a candidate is held when its particle's normal force at
+    /// the end of that step, `normal_force[particle]`, is positive, or when the first solve's
+    /// initial guess says it would sink: its velocity
     /// `v + dv` (`v` the step's start, `dv` the guess, the previous step's change) below the
     /// prescribed normal velocity by more than `sink_tolerance`, the re-hold test of
     /// [`ActiveSet::update`]. Where contact goes on, the previous step's set is a better first
