@@ -146,15 +146,15 @@ impl ActiveSet {
     /// The set that goes on from the previous step, without [`ActiveSet::predict`]'s product
     /// (`needs_prediction` is false): a candidate is held when its particle's normal force at
     /// the end of that step, `normal_force[particle]`, is positive, or when the first solve's
-    /// initial guess says it would sink: its velocity
-    /// `v + dv` (`v` the step's start, `dv` the guess, the previous step's change) below the
-    /// prescribed normal velocity by more than `sink_tolerance`, the re-hold test of
-    /// [`ActiveSet::update`]. Where contact goes on, the previous step's set is a better first
-    /// guess than every candidate held and the prediction: on spin-129 the rounds then took
-    /// 4 011 CG iterations over 200 steps instead of 5 554, and the sinking ones held up front
-    /// saved a further solve every second step at 290² (BENCHMARKS.md, twenty-seventh and
-    /// twenty-eighth sessions). Not where contact begins: there no particle had a normal force
-    /// and most candidates would start released (use [`ActiveSet::new`]).
+    /// initial guess says it would sink: its velocity `v + dv` (`v` the step's start, `dv` the
+    /// guess, the previous step's change) below the prescribed normal velocity by more than
+    /// `sink_tolerance`, the re-hold test of [`ActiveSet::update`]. Where contact goes on, the
+    /// previous step's set is a better first guess than every candidate held and the
+    /// prediction: on spin-129 the rounds then took 4 011 CG iterations over 200 steps instead
+    /// of 5 554, and the sinking ones held up front saved a further solve every second step at
+    /// 290² (BENCHMARKS.md, twenty-seventh and twenty-eighth sessions). Not where contact
+    /// begins: there no particle had a normal force and most candidates would start released
+    /// (use [`ActiveSet::new`]).
     pub fn continuing(
         candidates: Vec<ObstacleContact>,
         normal_force: &[f64],
