@@ -34,6 +34,14 @@ pub struct ObstacleContact {
     pub damping: f64,
 }
 
+impl ObstacleContact {
+    /// Whether a particle at velocity `v` would sink: its normal velocity below the prescribed
+    /// one by more than `tolerance` (a released contact that does is held again).
+    fn sinks(&self, v: Vec3, tolerance: f64) -> bool {
+        self.normal.dot(v) < self.normal_velocity - tolerance
+    }
+}
+
 /// The closest contact of `p` with `o` at time `t`: (distance on the particle's side, unit
 /// normal toward the particle, surface velocity).
 fn contact(o: &Obstacle, p: Vec3, t: f64) -> (f64, Vec3, Vec3) {
@@ -167,7 +175,7 @@ impl ActiveSet {
                 let i = c.particle as usize;
                 let pushed = normal_force.get(i).is_some_and(|&f| f > 0.0);
                 let guess = v[i] + dv.get(i).copied().unwrap_or(Vec3::ZERO);
-                pushed || c.normal.dot(guess) < c.normal_velocity - sink_tolerance
+                pushed || c.sinks(guess, sink_tolerance)
             })
             .collect();
         ActiveSet {
@@ -262,7 +270,7 @@ impl ActiveSet {
             let flip = if *a {
                 *l < -1e-9 * scale
             } else {
-                ct.normal.dot(v[i] + dv[i]) < ct.normal_velocity - sink_tolerance
+                ct.sinks(v[i] + dv[i], sink_tolerance)
             };
             if flip {
                 *a = !*a;
