@@ -5,11 +5,11 @@
 //! the [`ActiveSet`] release contacts that pull and hold again released ones that sink; at most
 //! [`CONTACT_ROUNDS`] solves per iteration, each from the previous one's solution. Where
 //! contact goes on, the first solve holds the contacts that pushed at the end of the previous
-//! step and those the initial guess says would sink ([`ActiveSet::continuing`]). Where it begins, or at an impact, it holds every candidate
-//! but those the initial guess (the previous step's velocity change) says would pull while their
-//! particle leaves the surface anyway, which are released up front. The last
-//! round keeps the contact set its solve used, so friction gets contacts that match the
-//! velocities they come with.
+//! step and those the initial guess says would sink ([`ActiveSet::continuing`]). Where it
+//! begins, or at an impact, it holds every candidate but those the initial guess (the previous
+//! step's velocity change) says would pull while their particle leaves the surface anyway,
+//! which are released up front. The last round keeps the contact set its solve used, so
+//! friction gets contacts that match the velocities they come with.
 
 use super::report::{StepReport, timed};
 use super::settings::{LinearSolver, SolverSettings};
