@@ -83,6 +83,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     a.mul_vec(&want, &mut b);
     let z = vec![Vec3::ZERO; a.n()];
     let mut scratch = PcgScratch::default();
+    // the strength of connection a simulation's multigrid uses (step/mod.rs)
+    scratch.multigrid().params.strength = 0.08;
     for iterations in [k, 2 * k] {
         let settings = PcgSettings {
             tolerance: 1e-14,
@@ -91,7 +93,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             keep_coarse: false,
         };
         let mut x = vec![Vec3::ZERO; a.n()];
+        let t0 = std::time::Instant::now();
         let stats = pcg::solve(&a, &b, &s, &z, &mut x, &settings, &mut scratch);
+        let took = t0.elapsed().as_secs_f64();
+        let mg = scratch.multigrid();
+        println!(
+            "levels {:?} blocks {:?}; solve {:.1} ms, setup {:.1} ms",
+            mg.level_sizes(),
+            mg.level_blocks(),
+            1e3 * took,
+            1e3 * (mg.times.structure + mg.times.values)
+        );
         let e: Vec<Vec3> = x.iter().zip(&want).map(|(x, w)| *x - *w).collect();
         for m in [5, 9] {
             let (t, r) = shares(&e, sim.positions(), n, m);
