@@ -8,6 +8,10 @@ use crate::error::{Error, Result};
 use crate::math::Vec3;
 use std::collections::HashMap;
 
+/// Largest mesh drapery generates itself (a grid, a garment's panels), in vertices (2²⁴), so
+/// that a typo in a size or a unit cannot exhaust memory.
+pub const MAX_GENERATED_VERTICES: usize = 1 << 24;
+
 /// A polygon face: a triangle or a quad, vertex indices in winding order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Face {

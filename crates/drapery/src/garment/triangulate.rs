@@ -5,7 +5,7 @@
 use super::pattern::{Curve, Panel, Pattern, Point2, dist, orient};
 use crate::error::{Error, Result};
 use crate::math::Vec3;
-use crate::mesh::{Face, Mesh};
+use crate::mesh::{Face, MAX_GENERATED_VERTICES, Mesh};
 use spade::{ConstrainedDelaunayTriangulation, Point2 as SPoint, Triangulation};
 
 /// One panel as a triangle mesh.
@@ -61,26 +61,29 @@ impl Pattern {
             )));
         }
         let scale = 1.0 / self.units_in_meter;
-        // segment count per edge, then equalised across stitches
-        let mut counts: Vec<Vec<usize>> = self
-            .panels
-            .iter()
-            .map(|p| {
-                p.edges
-                    .iter()
-                    .map(|e| {
-                        let n = (e.curve.length() * scale / edge_length).round() as usize;
-                        // a curve gets at least two segments, a line one
-                        let least = if matches!(e.curve, Curve::Line { .. }) {
-                            1
-                        } else {
-                            2
-                        };
-                        n.max(least)
-                    })
-                    .collect()
-            })
-            .collect();
+        // segment count per edge, then equalised across stitches; a panel whose outline alone
+        // would exceed the vertex limit (a coordinate or a unit off by orders of magnitude) is
+        // an error before anything is allocated
+        let mut counts: Vec<Vec<usize>> = Vec::with_capacity(self.panels.len());
+        for p in &self.panels {
+            let mut row = Vec::with_capacity(p.edges.len());
+            let mut total = 0.0;
+            for e in &p.edges {
+                let n = (e.curve.length() * scale / edge_length).round();
+                total += n;
+                if total.is_nan() || total > MAX_GENERATED_VERTICES as f64 {
+                    return Err(self.too_large(p, edge_length, "its outline", total));
+                }
+                // a curve gets at least two segments, a line one
+                let least = if matches!(e.curve, Curve::Line { .. }) {
+                    1
+                } else {
+                    2
+                };
+                row.push((n as usize).max(least));
+            }
+            counts.push(row);
+        }
         let mut stitched: Vec<Vec<Option<usize>>> = self
             .panels
             .iter()
@@ -129,6 +132,18 @@ impl Pattern {
         Ok(Garment { panels, stitches })
     }
 
+    /// The error of a panel whose mesh would exceed [`MAX_GENERATED_VERTICES`]: `what` would
+    /// have `count` points at edge length `h`.
+    fn too_large(&self, panel: &Panel, h: f64, what: &str, count: f64) -> Error {
+        Error::input(
+            &self.origin,
+            format!(
+                "panel `{}`: at edge length {h} m {what} would have {count:.3e} points; at most {MAX_GENERATED_VERTICES} vertices are allowed (check the panel's coordinates, properties.units_in_meter and edge_length)",
+                panel.name
+            ),
+        )
+    }
+
     fn triangulate_panel(&self, panel: &Panel, counts: &[usize], h: f64) -> Result<PanelMesh> {
         let scale = 1.0 / self.units_in_meter;
         // outline: each edge's points but its end (the next edge's start)
@@ -175,8 +190,15 @@ impl Pattern {
             }
         }
         let dy = h * 3f64.sqrt() / 2.0;
-        let rows = ((hi[1] - lo[1]) / dy).floor() as usize;
-        let cols = ((hi[0] - lo[0]) / h).floor() as usize + 1;
+        let (rows, cols) = (
+            ((hi[1] - lo[1]) / dy).floor(),
+            ((hi[0] - lo[0]) / h).floor() + 1.0,
+        );
+        let lattice = (rows + 1.0) * (cols + 1.0);
+        if lattice.is_nan() || lattice > MAX_GENERATED_VERTICES as f64 {
+            return Err(self.too_large(panel, h, "the lattice over its bounding box", lattice));
+        }
+        let (rows, cols) = (rows as usize, cols as usize);
         let y0 = lo[1] + 0.5 * ((hi[1] - lo[1]) - rows as f64 * dy);
         let x0 = lo[0] + 0.5 * ((hi[0] - lo[0]) - (cols - 1) as f64 * h) - 0.25 * h;
         let grid = SegmentGrid::new(ring, lo, hi, h);
@@ -781,6 +803,35 @@ mod tests {
         let g = p.triangulate(0.005).unwrap();
         assert_area(&p, &g, None);
         assert_well_formed(&g.panels[0]);
+    }
+
+    /// A coordinate or an edge length orders of magnitude off is an error naming the file and
+    /// the panel, before anything of the mesh's size is allocated (found by mutating the
+    /// example patterns: a vertex at 1e308 cm ran out of memory).
+    #[test]
+    fn a_panel_beyond_the_vertex_limit_is_an_error() {
+        for (side, h, what) in [
+            (1e12, 0.01, "its outline"),
+            (1e308, 0.01, "its outline"),
+            (100.0, 1e-4, "the lattice"),
+        ] {
+            let text = spec(&square("huge", side), "");
+            let e = Pattern::parse(&text, "huge.json")
+                .unwrap()
+                .triangulate(h)
+                .unwrap_err()
+                .to_string();
+            assert_mentions(&e, &["huge.json", "panel `huge`", what, "at most 16777216"]);
+        }
+        // a fine panel well within the limit is meshed: a 1 m square at 5 mm has 800 outline
+        // points and about 1 / (h · h √3/2) = 46 188 lattice points inside
+        let text = spec(&square("fine", 100.0), "");
+        let g = Pattern::parse(&text, "fine.json")
+            .unwrap()
+            .triangulate(5e-3)
+            .unwrap();
+        let n = g.panels[0].mesh.vertex_count();
+        assert!((44_000..49_000).contains(&n), "{n} vertices");
     }
 
     #[test]

@@ -223,7 +223,7 @@ struct DiscTable {
 }
 
 /// Largest generated grid, in vertices (2²⁴), so that a typo cannot exhaust memory.
-pub const MAX_GRID_VERTICES: usize = 1 << 24;
+pub const MAX_GRID_VERTICES: usize = crate::mesh::MAX_GENERATED_VERTICES;
 
 /// Default gravity, m/s².
 pub const DEFAULT_GRAVITY: [f64; 3] = [0.0, -9.81, 0.0];
