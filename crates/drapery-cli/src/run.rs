@@ -362,6 +362,15 @@ pub fn run(args: RunArgs) -> Result<()> {
                     )
                 });
             }
+            if let Some((count @ 1.., closest)) = sim.close_pairs() {
+                let thickness = sim.model().collision().map_or(0.0, |c| c.thickness);
+                progress.suspend(|| {
+                    eprintln!(
+                        "warning: {}: collision.thickness: {count} cloth pairs that share no vertex start closer than the thickness ({thickness} m; the closest {closest:.3e} m apart), so the cloth pushes itself apart from the first step (a thickness beyond the mesh's own spacing, or layers placed closer than it)",
+                        args.scene.display()
+                    )
+                });
+            }
         }
         emit(0, &sim, &mut writer)?;
     }

@@ -71,6 +71,14 @@ pub fn validate(args: ValidateArgs) -> Result<()> {
                 ));
             }
         }
+        match sim.close_pairs() {
+            Some((0, _)) => out.push_str("initial state: no cloth pair closer than the thickness\n"),
+            Some((count, closest)) => out.push_str(&format!(
+                "initial state: {count} cloth pairs closer than the thickness (the closest {} m apart)\n",
+                sig(closest)
+            )),
+            None => {}
+        }
     }
     out.push_str(&format!(
         "total: {} cloths, {} vertices, {} springs, mass {} kg\n",

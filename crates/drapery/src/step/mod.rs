@@ -586,6 +586,56 @@ impl Simulation {
         }
     }
 
+    /// The cloth–cloth contacts at the current state: pairs of cloth primitives (vertex and
+    /// triangle, or two edges) that share no vertex, are not exempt (a seam's neighbourhood, a
+    /// starting tangle) and are closer than `collision.thickness`, so that the repulsion pushes
+    /// them apart at the next step; `None` without self-collision. Returns their count and the
+    /// distance of the closest. At the start of a run these are a thickness too large for the
+    /// mesh (it exceeds the distance from a vertex to the triangles beyond its neighbours, about
+    /// 0.7 edge lengths on a grid) or layers placed closer than it: the cloth then pushes itself
+    /// apart from the first step.
+    pub fn close_pairs(&self) -> Option<(usize, f64)> {
+        let c = self.model.collision.as_ref()?;
+        if !c.self_collision {
+            return None;
+        }
+        let fresh;
+        let tangles = if self.tangles.found {
+            &self.tangles
+        } else {
+            fresh = Tangles::find(&self.model, &self.triangles, self.time);
+            &fresh
+        };
+        let n = self.model.particle_count();
+        let pose = pose::at(&self.model, self.time, 0.0);
+        let x = &self.model.x;
+        let cand = crate::collision::broad_phase::candidates(
+            x,
+            x,
+            &self.triangles,
+            &self.edges,
+            c.thickness,
+        );
+        let close = crate::collision::proximity::proximities(
+            x,
+            &self.triangles,
+            &self.edges,
+            &cand,
+            c.thickness,
+        );
+        let (mut count, mut closest) = (0, f64::INFINITY);
+        for s in &close {
+            let ids = &s.particles;
+            if ids.iter().any(|&p| !pose.pinned[p as usize])
+                && !(self.seams.exempt(ids) || tangles.exempt(ids, n))
+            {
+                count += 1;
+                closest = closest.min(s.dist);
+            }
+        }
+        Some((count, closest))
+    }
+
     /// Cloth triangle pairs that intersect and particles inside solid obstacles or closed
     /// meshes, at the current state (what `drapery check` counts). A starting state with
     /// intersections is untangled by the steps ([`Simulation::tangled`]).
@@ -728,5 +778,38 @@ mod tests {
         // the pinned particle stays where it was put
         assert_eq!(sim.positions()[0], x[0]);
         assert_eq!((sim.steps(), sim.time()), (1, 0.01));
+    }
+
+    /// On a grid of spacing `h` split into right triangles, the nearest primitive sharing no
+    /// vertex with a vertex is a triangle across the opposite edge of one of its triangles, at
+    /// the distance of a vertex to a diagonal, `h / √2`: a thickness below it starts with no
+    /// close pair, one above it with many, the closest that far apart; two layers placed closer
+    /// than the thickness are close pairs too, and none without self-collision.
+    #[test]
+    fn close_pairs_at_the_start_follow_the_thickness_and_the_spacing() {
+        let scene = |thickness: f64, layers: &str, self_collision: bool| {
+            let text = format!(
+                "[simulation]\nduration = 0.1\ndt = 0.01\nframe_rate = 10\n\
+                 [collision]\nthickness = {thickness}\nself_collision = {self_collision}\n\
+                 [[cloth]]\nname = \"a\"\ndensity = 0.1\n\
+                 grid = {{ size = [0.5, 0.5], resolution = [11, 11], normal = [0.0, 1.0, 0.0] }}\n{layers}"
+            );
+            crate::scene::Scene::from_str(&text, std::path::Path::new("close.toml"))
+                .unwrap()
+                .build()
+                .unwrap()
+                .close_pairs()
+        };
+        let diagonal = 0.05 / 2f64.sqrt();
+        assert_eq!(scene(0.99 * diagonal, "", true).map(|c| c.0), Some(0));
+        let (count, closest) = scene(1.01 * diagonal, "", true).unwrap();
+        assert!(count > 100, "{count}");
+        assert!((closest - diagonal).abs() < 1e-12, "{closest}");
+        let second = "[[cloth]]\nname = \"b\"\ndensity = 0.1\n\
+             grid = { size = [0.5, 0.5], resolution = [11, 11], center = [0.0, 0.003, 0.0], normal = [0.0, 1.0, 0.0] }\n";
+        let (count, closest) = scene(0.005, second, true).unwrap();
+        assert!(count > 100, "{count}");
+        assert!((closest - 0.003).abs() < 1e-12, "{closest}");
+        assert_eq!(scene(0.005, second, false), None);
     }
 }
