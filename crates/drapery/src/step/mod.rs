@@ -184,13 +184,8 @@ impl Simulation {
         })?;
         timed(&mut report.stages.pose, || self.reference(h));
         // the starting tangles are found at the first step (kept only if the step succeeds)
-        let fresh;
-        let tangles = if self.tangles.found {
-            &self.tangles
-        } else {
-            fresh = Tangles::find(&self.model, &self.triangles, self.time);
-            &fresh
-        };
+        let mut fresh = None;
+        let tangles = (self.tangles).or_find(&self.model, &self.triangles, self.time, &mut fresh);
         let pose = timed(&mut report.stages.pose, || {
             let mut pose = pose::at(&self.model, self.time, h);
             if let Some(c) = &self.model.collision {
@@ -579,11 +574,10 @@ impl Simulation {
     /// step, what the first step will find (a fresh simulation's starting tangles); after a
     /// pre-roll, what remains of them.
     pub fn tangled(&self) -> Tangled {
-        if self.tangles.found {
-            self.tangles.counts()
-        } else {
-            Tangles::find(&self.model, &self.triangles, self.time).counts()
-        }
+        let mut fresh = None;
+        (self.tangles)
+            .or_find(&self.model, &self.triangles, self.time, &mut fresh)
+            .counts()
     }
 
     /// The cloth–cloth contacts at the current state: pairs of cloth primitives (vertex and
@@ -599,13 +593,8 @@ impl Simulation {
         if !c.self_collision {
             return None;
         }
-        let fresh;
-        let tangles = if self.tangles.found {
-            &self.tangles
-        } else {
-            fresh = Tangles::find(&self.model, &self.triangles, self.time);
-            &fresh
-        };
+        let mut fresh = None;
+        let tangles = (self.tangles).or_find(&self.model, &self.triangles, self.time, &mut fresh);
         let n = self.model.particle_count();
         let pose = pose::at(&self.model, self.time, 0.0);
         let x = &self.model.x;

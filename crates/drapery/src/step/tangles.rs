@@ -96,6 +96,22 @@ impl Tangles {
         Seams::around(n, triangles, &groups)
     }
 
+    /// These tangles once found (at the first step), else the ones `model` has now at time `t`,
+    /// found into `fresh`.
+    pub fn or_find<'a>(
+        &'a self,
+        model: &Model,
+        triangles: &[[u32; 3]],
+        t: f64,
+        fresh: &'a mut Option<Tangles>,
+    ) -> &'a Tangles {
+        if self.found {
+            self
+        } else {
+            fresh.insert(Tangles::find(model, triangles, t))
+        }
+    }
+
     /// The tangles of `model` at its current state and time `t` (nothing without collisions).
     pub fn find(model: &Model, triangles: &[[u32; 3]], t: f64) -> Tangles {
         let Some(c) = &model.collision else {
