@@ -225,3 +225,29 @@ def test_ctrl_c_interrupts_a_long_advance():
     assert p.returncode == 3, out
     steps = int(out.split()[-1])
     assert 0 < steps < 100000
+
+
+def test_close_pairs_follow_the_thickness_against_the_grid_spacing():
+    """On a grid of spacing h split into right triangles, the primitives sharing no vertex with
+    a vertex are at least h / sqrt(2) from it: the same count as the library's, through Python."""
+    def sim(thickness, self_collision=True):
+        d = {
+            "simulation": {"duration": 0.1, "dt": 0.01, "frame_rate": 10},
+            "collision": {"thickness": thickness, "self_collision": self_collision},
+            "cloth": [
+                {
+                    "name": "sheet",
+                    "grid": {"size": [0.5, 0.5], "resolution": [11, 11], "normal": [0.0, 1.0, 0.0]},
+                    "density": 0.1,
+                }
+            ],
+        }
+        return drapery.Simulation(drapery.Scene.from_dict(d))
+
+    diagonal = 0.05 / np.sqrt(2.0)
+    count, closest = sim(0.99 * diagonal).close_pairs
+    assert count == 0 and closest == float("inf")
+    count, closest = sim(1.01 * diagonal).close_pairs
+    assert count > 100
+    assert closest == pytest.approx(diagonal, abs=1e-12)
+    assert sim(1.01 * diagonal, self_collision=False).close_pairs is None

@@ -104,6 +104,9 @@ class Simulation:
     def tangled(self) -> tuple[int, int]:
         """What is still tangled: (vertices inside colliders, crossed cloth triangle pairs)."""
     @property
+    def close_pairs(self) -> Optional[tuple[int, float]]:
+        """Cloth pairs closer than collision.thickness now: (count, distance of the closest), or None without self-collision."""
+    @property
     def frame(self) -> int:
         """Whole frames of steps taken: steps // scene.steps_per_frame."""
     @property

@@ -224,6 +224,15 @@ impl PySimulation {
         (t.inside, t.crossings)
     }
 
+    /// The cloth pairs (sharing no vertex, not exempt) closer than collision.thickness now,
+    /// `(count, distance of the closest)`, or `None` without self-collision: at the start, a
+    /// thickness beyond the mesh's own spacing or layers placed closer than it (the cloth then
+    /// pushes itself apart; `drapery run` warns of it).
+    #[getter]
+    fn close_pairs(&self) -> Option<(usize, f64)> {
+        self.sim.close_pairs()
+    }
+
     /// Whole frames of steps taken: steps // scene.steps_per_frame (frame k is the state
     /// `drapery run` writes as frame_k).
     #[getter]
