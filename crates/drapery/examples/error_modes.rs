@@ -83,8 +83,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     a.mul_vec(&want, &mut b);
     let z = vec![Vec3::ZERO; a.n()];
     let mut scratch = PcgScratch::default();
-    // the strength of connection a simulation's multigrid uses (step/mod.rs)
-    scratch.multigrid().params.strength = 0.08;
+    // the strength of connection a simulation's multigrid uses
+    scratch.multigrid().params.strength = drapery::step::MULTIGRID_STRENGTH;
     for iterations in [k, 2 * k] {
         let settings = PcgSettings {
             tolerance: 1e-14,

@@ -19,12 +19,13 @@ use super::pose::Pose;
 use crate::collision::broad_phase::{Candidates, SweptBoxes};
 use crate::collision::bvh::TreeCache;
 use crate::collision::obstacle_proximity::{SharpFeatures, obstacle_proximities};
-use crate::collision::proximity::proximities;
+use crate::collision::proximity::{Proximity, proximities};
 use crate::collision::repulsion::Penalty;
 use crate::constraints::obstacle::{self, ObstacleContact};
 use crate::forces::obstacle_friction;
 use crate::forces::obstacle_repulsion::{lagged_coulomb, sliding};
 use crate::forces::{Force, ObstacleFrictions, ObstacleRepulsions, Repulsions};
+use crate::math::Vec3;
 use crate::model::Model;
 
 /// The contacts of one step.
@@ -53,6 +54,24 @@ impl Contacts {
         let friction = self.obstacle_friction.as_ref().map(|r| r as &dyn Force);
         cloth.into_iter().chain(obstacle).chain(friction).collect()
     }
+}
+
+/// The cloth–cloth repulsion stencils at `x` among the candidate pairs `cand`: the pairs closer
+/// than `thickness` with a particle that is not pinned and not `exempt` (a seam's
+/// neighbourhood, a starting tangle).
+pub(crate) fn self_stencils(
+    x: &[Vec3],
+    triangles: &[[u32; 3]],
+    edges: &[[u32; 2]],
+    cand: &Candidates,
+    thickness: f64,
+    pose: &Pose,
+    exempt: &(dyn Fn(&[u32; 4]) -> bool + Sync),
+) -> Vec<Proximity> {
+    let mut stencils = proximities(x, triangles, edges, cand, thickness);
+    stencils
+        .retain(|s| s.particles.iter().any(|&p| !pose.pinned[p as usize]) && !exempt(&s.particles));
+    stencils
 }
 
 /// The contacts at the start of the step (none with collisions off). `normal_force` is each
@@ -117,10 +136,7 @@ pub(crate) fn contacts(
             }
         };
         pairs = cand.vt.len() + cand.ee.len();
-        let mut stencils = proximities(x0, triangles, edges, cand, c.thickness);
-        stencils.retain(|s| {
-            s.particles.iter().any(|&p| !pose.pinned[p as usize]) && !exempt(&s.particles)
-        });
+        let stencils = self_stencils(x0, triangles, edges, cand, c.thickness, pose, exempt);
         (!stencils.is_empty()).then(|| Repulsions::new(stencils, penalty))
     } else {
         None
@@ -166,7 +182,6 @@ pub(crate) fn contacts(
 mod tests {
     use super::*;
     use crate::collision::seams::Seams;
-    use crate::math::Vec3;
     use crate::step::{pose, testing};
 
     #[test]

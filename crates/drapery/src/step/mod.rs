@@ -120,7 +120,7 @@ struct Work {
 
 /// Strength-of-connection threshold of the multigrid, applied to the system matrix at the
 /// initial state (see [`Simulation::reference`]).
-const MULTIGRID_STRENGTH: f64 = 0.08;
+pub const MULTIGRID_STRENGTH: f64 = 0.08;
 
 impl Simulation {
     /// Prepares a simulation: builds the forces from the model, the matrix pattern and the
@@ -597,32 +597,12 @@ impl Simulation {
         let tangles = (self.tangles).or_find(&self.model, &self.triangles, self.time, &mut fresh);
         let n = self.model.particle_count();
         let pose = pose::at(&self.model, self.time, 0.0);
-        let x = &self.model.x;
-        let cand = crate::collision::broad_phase::candidates(
-            x,
-            x,
-            &self.triangles,
-            &self.edges,
-            c.thickness,
-        );
-        let close = crate::collision::proximity::proximities(
-            x,
-            &self.triangles,
-            &self.edges,
-            &cand,
-            c.thickness,
-        );
-        let (mut count, mut closest) = (0, f64::INFINITY);
-        for s in &close {
-            let ids = &s.particles;
-            if ids.iter().any(|&p| !pose.pinned[p as usize])
-                && !(self.seams.exempt(ids) || tangles.exempt(ids, n))
-            {
-                count += 1;
-                closest = closest.min(s.dist);
-            }
-        }
-        Some((count, closest))
+        let (x, tris, edges) = (&self.model.x, &self.triangles, &self.edges);
+        let cand = crate::collision::broad_phase::candidates(x, x, tris, edges, c.thickness);
+        let exempt = |ids: &[u32; 4]| self.seams.exempt(ids) || tangles.exempt(ids, n);
+        let close = detect::self_stencils(x, tris, edges, &cand, c.thickness, &pose, &exempt);
+        let closest = close.iter().map(|s| s.dist).fold(f64::INFINITY, f64::min);
+        Some((close.len(), closest))
     }
 
     /// Cloth triangle pairs that intersect and particles inside solid obstacles or closed
