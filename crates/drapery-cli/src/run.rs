@@ -349,28 +349,9 @@ pub fn run(args: RunArgs) -> Result<()> {
                 )
             });
         }
-        if sim.model().collision().is_some() {
-            let (pairs, inside) = sim.intersections();
-            let t = sim.tangled();
-            // what untangling does not handle: pinned vertices inside, crossings without
-            // self-collision
-            if pairs > t.crossings || inside > t.inside {
-                progress.suspend(|| {
-                    eprintln!(
-                        "warning: {}: frame 0 intersects ({pairs} intersecting cloth triangle pairs, {inside} vertices inside colliders), not all of it being untangled (pinned or handle vertices inside a collider, or crossings without self_collision)",
-                        args.scene.display()
-                    )
-                });
-            }
-            if let Some((count @ 1.., closest)) = sim.close_pairs() {
-                let thickness = sim.model().collision().map_or(0.0, |c| c.thickness);
-                progress.suspend(|| {
-                    eprintln!(
-                        "warning: {}: collision.thickness: {count} cloth pairs that share no vertex start closer than the thickness ({thickness} m; the closest {closest:.3e} m apart), so the cloth pushes itself apart from the first step (a thickness beyond the mesh's own spacing, or layers placed closer than it)",
-                        args.scene.display()
-                    )
-                });
-            }
+        // what the first steps will not untangle, and a thickness beyond the mesh's spacing
+        for w in sim.start_check().map(|c| c.warnings()).unwrap_or_default() {
+            progress.suspend(|| eprintln!("warning: {}: {w}", args.scene.display()));
         }
         emit(0, &sim, &mut writer)?;
     }

@@ -192,6 +192,17 @@ fn scene_case(text: &str, files: &[(&str, &str)]) -> (tempfile::TempDir, PathBuf
     (t, s)
 }
 
+/// `drapery run SCENE -o OUT -q`.
+fn run_quiet(scene: &Path, out: &Path) -> common::Out {
+    drapery(&[
+        "run".as_ref(),
+        scene.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "-q".as_ref(),
+    ])
+}
+
 const PLATE: &str = "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nf 1 4 3 2\n";
 
 #[test]
@@ -225,6 +236,33 @@ fn validate_prints_colliders_settings_and_the_initial_state() {
     );
 }
 
+/// A thickness above the grid's `h/√2` (the distance from a vertex to the nearest triangle it
+/// does not touch; 7.07 cm on the 10 cm grid) starts with cloth pairs closer than it: one
+/// warning line naming the scene and the field; below it none.
+#[test]
+fn a_run_whose_thickness_exceeds_the_mesh_spacing_warns_once() {
+    for (thickness, warned) in [(0.069, false), (0.072, true)] {
+        let text = format!("{BASE}\n[collision]\nthickness = {thickness}\nself_collision = true\n");
+        let (t, s) = scene_case(&text, &[]);
+        let out = t.path().join("out");
+        let r = run_quiet(&s, &out);
+        assert_eq!(r.code, Some(0), "{}", r.stderr);
+        let lines: Vec<&str> = r.stderr.lines().collect();
+        if warned {
+            assert_eq!(lines.len(), 1, "{}", r.stderr);
+            let want = format!("warning: {}: collision.thickness: ", s.display());
+            assert!(lines[0].starts_with(&want), "{}", lines[0]);
+            assert!(
+                lines[0].contains("the closest 7.071e-2 m apart"),
+                "{}",
+                lines[0]
+            );
+        } else {
+            assert!(lines.is_empty(), "{}", r.stderr);
+        }
+    }
+}
+
 #[test]
 fn a_run_starting_inside_a_collider_says_so_and_pushes_it_out_in_the_first_steps() {
     // the middle vertex of the sheet (y = 0.5) starts 1 mm inside a sphere around (0, 0.2, 0)
@@ -241,13 +279,7 @@ fn a_run_starting_inside_a_collider_says_so_and_pushes_it_out_in_the_first_steps
         v.stdout
     );
     assert!(!v.stdout.contains("INTERSECTS"), "{}", v.stdout);
-    let r = drapery(&[
-        "run".as_ref(),
-        s.as_os_str(),
-        "-o".as_ref(),
-        out.as_os_str(),
-        "-q".as_ref(),
-    ]);
+    let r = run_quiet(&s, &out);
     assert_eq!(r.code, Some(0), "{}", r.stderr);
     let lines: Vec<&str> = r.stderr.lines().collect();
     assert_eq!(lines.len(), 1, "{}", r.stderr);

@@ -251,3 +251,44 @@ def test_close_pairs_follow_the_thickness_against_the_grid_spacing():
     assert count > 100
     assert closest == pytest.approx(diagonal, abs=1e-12)
     assert sim(1.01 * diagonal, self_collision=False).close_pairs is None
+
+
+def test_run_warns_where_the_command_warns_at_frame_0(tmp_path):
+    """drapery.run raises the command's frame-0 warnings as RuntimeWarning: a thickness above
+    the grid's h / sqrt(2) (the closest pair that far apart), and a pinned vertex inside a
+    sphere, which the steps do not push out (the free ones inside they do: no warning)."""
+    import warnings
+
+    def scene(thickness, pin=None, sphere=False):
+        cloth = {
+            "name": "sheet",
+            "grid": {"size": [0.5, 0.5], "resolution": [11, 11], "normal": [0.0, 1.0, 0.0]},
+            "density": 0.1,
+        }
+        if pin is not None:
+            cloth["pin"] = pin
+        d = {
+            "simulation": {"duration": 0.02, "dt": 0.01, "frame_rate": 100},
+            "collision": {"thickness": thickness, "self_collision": True},
+            "cloth": [cloth],
+        }
+        if sphere:
+            d["collider"] = [{"shape": "sphere", "center": [0.0, 0.0, 0.0], "radius": 0.06}]
+        return drapery.Scene.from_dict(d)
+
+    def warned(s):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            drapery.run(s, tmp_path, formats=[], on_frame=lambda k, x: None)
+        return [str(w.message) for w in caught if w.category is RuntimeWarning]
+
+    diagonal = 0.05 / np.sqrt(2.0)
+    assert warned(scene(0.99 * diagonal)) == []
+    (thick,) = warned(scene(1.01 * diagonal))
+    assert "collision.thickness: " in thick and "share no vertex" in thick
+    closest = float(thick.split("the closest ")[1].split(" m apart")[0])
+    assert closest == pytest.approx(diagonal, rel=1e-3)
+    # the centre (vertex 60) and its 4 neighbours are within the 6 cm sphere
+    assert warned(scene(0.01, sphere=True)) == []
+    (inside,) = warned(scene(0.01, pin=[60], sphere=True))
+    assert "frame 0 intersects (0 intersecting cloth triangle pairs, 5 vertices inside colliders)" in inside

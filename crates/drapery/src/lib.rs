@@ -45,4 +45,6 @@ pub use error::{Error, Result};
 pub use math::{Mat3, Vec3};
 pub use mesh::{Face, Mesh};
 pub use model::{ClothDesc, MassSpec, Material, Model};
-pub use step::{LinearSolver, Simulation, SolverSettings, StageTimes, StepReport, Tangled};
+pub use step::{
+    LinearSolver, Simulation, SolverSettings, StageTimes, StartCheck, StepReport, Tangled,
+};

@@ -173,7 +173,9 @@ def run(
     """Simulates ``scene`` and writes frame_00000.obj … into ``output`` as ``drapery run`` does
     (byte for byte); formats "obj" (default), "ply" and/or "pc2" (``<cloth name>.pc2`` caches). ``on_frame(k, positions)`` is called
     after frame k is written, with every particle's positions (float64, (n, 3)); with
-    ``formats=[]`` and ``on_frame`` no file is written."""
+    ``formats=[]`` and ``on_frame`` no file is written. Warns (RuntimeWarning) where the command
+    warns at frame 0: intersections the steps will not untangle, cloth pairs closer than
+    ``collision.thickness``."""
 
 def scene_toml(d: Mapping[str, Any]) -> str:
     """The TOML text of a scene dict, as ``Scene.from_dict`` reads it (not checked as a scene);

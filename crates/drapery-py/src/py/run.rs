@@ -7,9 +7,10 @@ use super::errors::{scene_error, simulation_error};
 use super::scene::{PyScene, load_scene};
 use super::sim::pool;
 use crate::frames::{FrameFormat, FrameRun, RunError};
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::{PyOSError, PyRuntimeWarning, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyString;
+use std::ffi::CString;
 use std::path::PathBuf;
 
 /// Runs `f` in `pool`, or here.
@@ -37,7 +38,9 @@ fn py_error(e: RunError) -> PyErr {
 /// given, is called after frame k is written with its positions (a new float64 array (n, 3),
 /// every particle) — the data of the files without reading them back; with `formats=[]` no
 /// file is written. Raises SceneError, SimulationError ("frame k: ...; frames 0 to k-1 are in
-/// DIR"), OSError, or what `on_frame` raises (the run stops there).
+/// DIR"), OSError, or what `on_frame` raises (the run stops there). Warns (RuntimeWarning,
+/// "<scene>: ...") where `drapery run` warns at frame 0: intersections the steps will not
+/// untangle, and cloth pairs closer than `collision.thickness`.
 #[pyfunction]
 #[pyo3(signature = (scene, output, formats = None, threads = None, on_frame = None))]
 pub fn run(
@@ -81,6 +84,14 @@ pub fn run(
             None => Ok(()),
         }
     };
+    let path = s.path.display().to_string();
+    let checked = py.detach(|| in_pool(&pool, || frames.simulation().start_check()));
+    for w in checked.map(|c| c.warnings()).unwrap_or_default() {
+        // (the texts hold no NUL byte, but the path might)
+        let text =
+            CString::new(format!("{path}: {w}").replace('\0', "")).expect("NUL bytes removed");
+        PyErr::warn(py, &py.get_type::<PyRuntimeWarning>(), &text, 1)?;
+    }
     seen(0, &frames)?;
     loop {
         py.check_signals()?;

@@ -32,6 +32,7 @@ mod pose;
 pub mod report;
 pub mod settings;
 mod solve;
+pub mod start_check;
 mod strain;
 mod system;
 pub mod tangles;
@@ -40,6 +41,7 @@ mod testing;
 
 pub use report::{StageTimes, StepReport};
 pub use settings::{FIRST_CONTACT_TOLERANCE, IMPACT_SHARE, LinearSolver, SolverSettings};
+pub use start_check::StartCheck;
 pub use tangles::Tangled;
 
 use crate::collision::broad_phase::Candidates;
@@ -589,12 +591,17 @@ impl Simulation {
     /// 0.7 edge lengths on a grid) or layers placed closer than it: the cloth then pushes itself
     /// apart from the first step.
     pub fn close_pairs(&self) -> Option<(usize, f64)> {
+        let mut fresh = None;
+        let tangles = (self.tangles).or_find(&self.model, &self.triangles, self.time, &mut fresh);
+        self.close_pairs_with(tangles)
+    }
+
+    /// [`Simulation::close_pairs`] with the starting tangles already found.
+    fn close_pairs_with(&self, tangles: &tangles::Tangles) -> Option<(usize, f64)> {
         let c = self.model.collision.as_ref()?;
         if !c.self_collision {
             return None;
         }
-        let mut fresh = None;
-        let tangles = (self.tangles).or_find(&self.model, &self.triangles, self.time, &mut fresh);
         let n = self.model.particle_count();
         let pose = pose::at(&self.model, self.time, 0.0);
         let (x, tris, edges) = (&self.model.x, &self.triangles, &self.edges);
@@ -603,6 +610,25 @@ impl Simulation {
         let close = detect::self_stencils(x, tris, edges, &cand, c.thickness, &pose, &exempt);
         let closest = close.iter().map(|s| s.dist).fold(f64::INFINITY, f64::min);
         Some((close.len(), closest))
+    }
+
+    /// What a run should say about the current state before stepping from it
+    /// ([`StartCheck::warnings`]): its intersections ([`Simulation::intersections`]), what the
+    /// steps untangle ([`Simulation::tangled`]) and the close pairs
+    /// ([`Simulation::close_pairs`]), from one search for the starting tangles; `None` without
+    /// collisions.
+    pub fn start_check(&self) -> Option<StartCheck> {
+        let c = self.model.collision.as_ref()?;
+        let mut fresh = None;
+        let tangles = (self.tangles).or_find(&self.model, &self.triangles, self.time, &mut fresh);
+        let (intersecting_pairs, inside) = self.intersections();
+        Some(StartCheck {
+            intersecting_pairs,
+            inside,
+            tangled: tangles.counts(),
+            close_pairs: self.close_pairs_with(tangles),
+            thickness: c.thickness,
+        })
     }
 
     /// Cloth triangle pairs that intersect and particles inside solid obstacles or closed
