@@ -256,15 +256,19 @@ pub fn run(args: RunArgs) -> Result<()> {
         .map(|&f| writer_for(f, dir, &stem, scene.frame_rate, &scene.obstacles))
         .partition(|w| w.whole_run());
     let keep_history = !whole_run.is_empty();
-    let mut untangling = None;
+    let (mut untangling, mut start_check) = (None, None);
     if matches!(begin, Start::Fresh) {
         // `[simulation] preroll`: settle with everything held at its pose at t = 0; frame 0 is
         // the settled state (a resumed run restores its snapshot instead); cloth starting
         // inside colliders or crossed is untangled there
-        let before = sim.tangled();
+        let before = (scene.preroll_steps() > 0).then(|| sim.tangled());
         sim.preroll(scene.preroll_steps(), scene.step_size())
             .with_context(|| format!("{}: pre-roll", args.scene.display()))?;
-        untangling = (before != drapery::Tangled::default()).then(|| (before, sim.tangled()));
+        // frame 0's facts, from one search for what is tangled
+        start_check = sim.start_check();
+        let now = start_check.map(|c| c.tangled).unwrap_or_default();
+        let before = before.unwrap_or(now);
+        untangling = (before != drapery::Tangled::default()).then_some((before, now));
     }
     let (first, history) = match begin {
         Start::Fresh => (
@@ -350,7 +354,7 @@ pub fn run(args: RunArgs) -> Result<()> {
             });
         }
         // what the first steps will not untangle, and a thickness beyond the mesh's spacing
-        for w in sim.start_check().map(|c| c.warnings()).unwrap_or_default() {
+        for w in start_check.map(|c| c.warnings()).unwrap_or_default() {
             progress.suspend(|| eprintln!("warning: {}: {w}", args.scene.display()));
         }
         emit(0, &sim, &mut writer)?;
