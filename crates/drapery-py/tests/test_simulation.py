@@ -292,3 +292,8 @@ def test_run_warns_where_the_command_warns_at_frame_0(tmp_path):
     assert warned(scene(0.01, sphere=True)) == []
     (inside,) = warned(scene(0.01, pin=[60], sphere=True))
     assert "frame 0 intersects (0 intersecting cloth triangle pairs, 5 vertices inside colliders)" in inside
+    # the same texts from a Simulation, without the scene's name
+    assert drapery.Simulation(scene(0.01, pin=[60], sphere=True)).start_warnings == [
+        inside.split(": ", 1)[1]
+    ]
+    assert drapery.Simulation(scene(0.01, sphere=True)).start_warnings == []

@@ -107,6 +107,9 @@ class Simulation:
     def close_pairs(self) -> Optional[tuple[int, float]]:
         """Cloth pairs closer than collision.thickness now: (count, distance of the closest), or None without self-collision."""
     @property
+    def start_warnings(self) -> list[str]:
+        """What ``drapery run`` would warn of, were a run to start from the current state: intersections the steps will not untangle, cloth pairs closer than collision.thickness (``[]`` for a clean start)."""
+    @property
     def frame(self) -> int:
         """Whole frames of steps taken: steps // scene.steps_per_frame."""
     @property

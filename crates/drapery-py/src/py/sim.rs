@@ -233,6 +233,17 @@ impl PySimulation {
         self.sim.close_pairs()
     }
 
+    /// What `drapery run` (and `drapery.run`) would warn of, were a run to start from the
+    /// current state: intersections the steps will not untangle (pinned or handle vertices
+    /// inside a collider, crossings without self-collision) and cloth pairs closer than
+    /// collision.thickness; one text per problem, `[]` for a clean start or without collisions.
+    #[getter]
+    fn start_warnings(&self) -> Vec<String> {
+        (self.sim.start_check())
+            .map(|c| c.warnings())
+            .unwrap_or_default()
+    }
+
     /// Whole frames of steps taken: steps // scene.steps_per_frame (frame k is the state
     /// `drapery run` writes as frame_k).
     #[getter]
