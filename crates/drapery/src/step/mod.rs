@@ -591,6 +591,10 @@ impl Simulation {
     /// 0.7 edge lengths on a grid) or layers placed closer than it: the cloth then pushes itself
     /// apart from the first step.
     pub fn close_pairs(&self) -> Option<(usize, f64)> {
+        // (no search for the tangles when there is nothing to count)
+        if !self.model.collision.as_ref()?.self_collision {
+            return None;
+        }
         let mut fresh = None;
         let tangles = (self.tangles).or_find(&self.model, &self.triangles, self.time, &mut fresh);
         self.close_pairs_with(tangles)
