@@ -625,10 +625,15 @@ impl Simulation {
         let c = self.model.collision.as_ref()?;
         let mut fresh = None;
         let tangles = (self.tangles).or_find(&self.model, &self.triangles, self.time, &mut fresh);
-        let (intersecting_pairs, inside) = self.intersections();
+        // tangles found now, with self-collision, list the intersecting pairs the checker counts
+        // (the same search); found at an earlier step, they are what is left of those
+        let intersecting_pairs = match !self.tangles.found && c.self_collision {
+            true => tangles.crossings.len(),
+            false => self.self_intersections(),
+        };
         Some(StartCheck {
             intersecting_pairs,
-            inside,
+            inside: self.penetrations(),
             tangled: tangles.counts(),
             close_pairs: self.close_pairs_with(tangles),
             thickness: c.thickness,
@@ -639,22 +644,22 @@ impl Simulation {
     /// meshes, at the current state (what `drapery check` counts). A starting state with
     /// intersections is untangled by the steps ([`Simulation::tangled`]).
     pub fn intersections(&self) -> (usize, usize) {
+        (self.self_intersections(), self.penetrations())
+    }
+
+    /// The first count of [`Simulation::intersections`].
+    fn self_intersections(&self) -> usize {
         // the two ends of a stitched pair count as one vertex (a closed seam's sides touch)
         let sewn: Vec<[u32; 2]> = self.model.stitches.iter().map(|s| [s.a, s.b]).collect();
-        let selfi = crate::collision::check::count_sewn_intersections(
-            &self.model.x,
-            &self.triangles,
-            &sewn,
-        );
-        let colliders: Vec<_> = self
-            .model
-            .obstacles
-            .iter()
+        crate::collision::check::count_sewn_intersections(&self.model.x, &self.triangles, &sewn)
+    }
+
+    /// The second count of [`Simulation::intersections`].
+    fn penetrations(&self) -> usize {
+        let colliders: Vec<_> = (self.model.obstacles.iter())
             .map(|o| o.collider.clone())
             .collect();
-        let pen =
-            crate::collision::check::count_penetrations(&self.model.x, &colliders, self.time, 0.0);
-        (selfi, pen)
+        crate::collision::check::count_penetrations(&self.model.x, &colliders, self.time, 0.0)
     }
 }
 

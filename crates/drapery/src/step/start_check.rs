@@ -101,6 +101,44 @@ mod tests {
         assert!(w[0].starts_with("frame 0 intersects (0 intersecting cloth triangle pairs, 5 vertices inside colliders)"), "{}", w[0]);
     }
 
+    /// A vertical sheet through the middle of the horizontal one: with self-collision the
+    /// steps untangle every crossing (no warning, and the count, taken from the tangles' own
+    /// search, is the checker's); without it the crossings stay and are a warning.
+    #[test]
+    fn crossed_sheets_are_counted_as_the_checker_counts_them() {
+        let through = "[[cloth]]\nname = \"b\"\ndensity = 0.1\n\
+             grid = { size = [0.5, 0.5], resolution = [11, 11], center = [0.017, 0.013, 0.0], normal = [1.0, 0.0, 0.0] }\n";
+        let crossed = sim(0.01, "", through);
+        let (pairs, inside) = crossed.intersections();
+        assert!(pairs > 10 && inside == 0, "{pairs} {inside}");
+        let c = crossed.start_check().unwrap();
+        assert_eq!((c.intersecting_pairs, c.tangled.crossings), (pairs, pairs));
+        assert!(c.warnings().is_empty(), "{:?}", c.warnings());
+        let text = format!(
+            "[simulation]\nduration = 0.1\ndt = 0.01\nframe_rate = 10\n\
+             [collision]\nthickness = 0.01\nself_collision = false\n\
+             [[cloth]]\nname = \"a\"\ndensity = 0.1\n\
+             grid = {{ size = [0.5, 0.5], resolution = [11, 11], normal = [0.0, 1.0, 0.0] }}\n{through}"
+        );
+        let unsewn = Scene::from_str(&text, Path::new("crossed.toml"))
+            .unwrap()
+            .build()
+            .unwrap()
+            .start_check()
+            .unwrap();
+        assert_eq!(
+            (unsewn.intersecting_pairs, unsewn.tangled.crossings),
+            (pairs, 0)
+        );
+        let w = unsewn.warnings();
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].starts_with(&format!("frame 0 intersects ({pairs} intersecting")),
+            "{}",
+            w[0]
+        );
+    }
+
     #[test]
     fn without_collisions_there_is_nothing_to_check() {
         let text = "[simulation]\nduration = 0.1\ndt = 0.01\nframe_rate = 10\n\
