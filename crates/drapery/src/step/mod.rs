@@ -591,29 +591,22 @@ impl Simulation {
     /// 0.7 edge lengths on a grid) or layers placed closer than it: the cloth then pushes itself
     /// apart from the first step.
     pub fn close_pairs(&self) -> Option<(usize, f64)> {
-        // (no search for the tangles when there is nothing to count)
-        if !self.model.collision.as_ref()?.self_collision {
-            return None;
-        }
+        let c = self.model.collision.as_ref().filter(|c| c.self_collision)?;
         let mut fresh = None;
         let tangles = (self.tangles).or_find(&self.model, &self.triangles, self.time, &mut fresh);
-        self.close_pairs_with(tangles)
+        Some(self.close_pairs_with(tangles, c.thickness))
     }
 
-    /// [`Simulation::close_pairs`] with the starting tangles already found.
-    fn close_pairs_with(&self, tangles: &tangles::Tangles) -> Option<(usize, f64)> {
-        let c = self.model.collision.as_ref()?;
-        if !c.self_collision {
-            return None;
-        }
+    /// [`Simulation::close_pairs`] with self-collision on, the starting tangles already found.
+    fn close_pairs_with(&self, tangles: &tangles::Tangles, thickness: f64) -> (usize, f64) {
         let n = self.model.particle_count();
         let pose = pose::at(&self.model, self.time, 0.0);
         let (x, tris, edges) = (&self.model.x, &self.triangles, &self.edges);
-        let cand = crate::collision::broad_phase::candidates(x, x, tris, edges, c.thickness);
+        let cand = crate::collision::broad_phase::candidates(x, x, tris, edges, thickness);
         let exempt = |ids: &[u32; 4]| self.seams.exempt(ids) || tangles.exempt(ids, n);
-        let close = detect::self_stencils(x, tris, edges, &cand, c.thickness, &pose, &exempt);
+        let close = detect::self_stencils(x, tris, edges, &cand, thickness, &pose, &exempt);
         let closest = close.iter().map(|s| s.dist).fold(f64::INFINITY, f64::min);
-        Some((close.len(), closest))
+        (close.len(), closest)
     }
 
     /// What a run should say about the current state before stepping from it
@@ -635,7 +628,7 @@ impl Simulation {
             intersecting_pairs,
             inside: self.penetrations(),
             tangled: tangles.counts(),
-            close_pairs: self.close_pairs_with(tangles),
+            close_pairs: (c.self_collision).then(|| self.close_pairs_with(tangles, c.thickness)),
             thickness: c.thickness,
         })
     }
