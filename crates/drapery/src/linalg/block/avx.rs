@@ -63,12 +63,30 @@ pub(crate) fn times(c: &[__m256d; 3], v: &Vec3) -> __m256d {
     _mm256_add_pd(_mm256_add_pd(x, y), z)
 }
 
-/// `acc + Σ_k blocks[k] x[cols[k]]`, in order.
+/// How far ahead of the block being read [`prefetch_ahead`] asks for memory, in bytes: 32 cache
+/// lines, about 28 blocks. The products stream their blocks from memory (a spin-290 matrix is
+/// larger than the last-level cache), and the hardware prefetcher alone leaves the cores
+/// waiting on it (BENCHMARKS.md, thirty-second session).
+pub(crate) const AHEAD: usize = 2048;
+
+/// Asks the CPU to bring the cache line [`AHEAD`] bytes past `p` into the cache: for a loop that
+/// walks an array of blocks in order. A hint only: it reads nothing into the program and cannot
+/// fault, past the array's end included (`wrapping_add` computes the address without requiring
+/// it to lie in the allocation).
+#[inline]
+#[target_feature(enable = "avx")]
+pub(crate) fn prefetch_ahead<T>(p: *const T) {
+    _mm_prefetch::<_MM_HINT_T0>((p as *const i8).wrapping_add(AHEAD));
+}
+
+/// `acc + Σ_k blocks[k] x[cols[k]]`, in order (reading ahead of the blocks, which for a matrix's
+/// rows walked in order are the next rows' blocks).
 #[inline]
 #[target_feature(enable = "avx")]
 pub(crate) fn add_products(acc: Vec3, blocks: &[Mat3], cols: &[u32], x: &[Vec3]) -> Vec3 {
     let mut a = load3(&acc);
     for (m, &j) in blocks.iter().zip(cols) {
+        prefetch_ahead(m);
         a = _mm256_add_pd(a, times(&columns(m), &x[j as usize]));
     }
     let mut out = Vec3::ZERO;

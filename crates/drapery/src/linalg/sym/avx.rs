@@ -3,12 +3,15 @@
 //! meets a zero), `A_ij x_j` is three broadcasts, multiplies and adds, and `A_ijᵀ x_i` is three
 //! multiplies and two horizontal adds. Each lane adds in the order of the scalar code
 //! ([`super::rows_scalar`]), so the bits are the same (a dot product's last term gains `+ 0`,
-//! which can only turn a `-0` into `+0`).
+//! which can only turn a `-0` into `+0`). The loop asks for the blocks ahead of the one it reads
+//! ([`prefetch_ahead`]): a cloth's matrix streams from memory, and without the hint the cores wait
+//! on it (a spin-290 product took 2.0 ms without, 1.6 ms with; BENCHMARKS.md, thirty-second
+//! session).
 //!
 //! Compiled for AVX whatever the build's target CPU; reached only after
 //! [`crate::linalg::simd::avx`] said the CPU has it.
 
-use crate::linalg::block::avx::{load3, store3, times};
+use crate::linalg::block::avx::{load3, prefetch_ahead, store3, times};
 use crate::math::{Mat3, Vec3};
 use std::arch::x86_64::*;
 
@@ -38,6 +41,7 @@ pub(super) fn rows(
             let mut acc = _mm256_add_pd(load3(&y[i - first]), times(&columns(s), &x[i]));
             for (k, &j) in (s + 1..e).zip(&col[s + 1..e]) {
                 let j = j as usize;
+                prefetch_ahead(v.wrapping_add(9 * k));
                 let c = columns(k);
                 acc = _mm256_add_pd(acc, times(&c, &x[j]));
                 if j < end {
