@@ -119,6 +119,37 @@ pub fn point_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> PointTriangle {
     best
 }
 
+/// The parameters `(s, t)` of the critical point of `|p0 + s d1 - (q0 + t d2)|²` over the
+/// whole plane (`r = p0 - q0`), where the lines through the two segments are closest; `None`
+/// for a zero-length or (nearly) parallel direction.
+#[inline]
+fn critical_point(d1: Vec3, d2: Vec3, r: Vec3) -> Option<(f64, f64)> {
+    let a = d1.length_squared();
+    let e = d2.length_squared();
+    let b = d1.dot(d2);
+    let c = d1.dot(r);
+    let f = d2.dot(r);
+    let denom = a * e - b * b;
+    (a > 0.0 && e > 0.0 && denom > 1e-14 * a * e)
+        .then(|| ((b * f - c * e) / denom, (a * f - b * c) / denom))
+}
+
+/// Whether [`segment_segment`] could find the segments' closest points strictly inside both
+/// (`0 < s, t < 1`) and closer than `thickness`: false only when it certainly does not. It
+/// computes the interior candidate alone, the way [`segment_segment`] does: that candidate must
+/// be strictly inside the square and closer than `thickness`, since a boundary candidate that
+/// beats it has `s` or `t` at 0 or 1. A cloth's edge pairs near each other are mostly
+/// neighbours in one surface whose lines cross outside the segments, and this rejects them at a
+/// fraction of the full computation's cost (BENCHMARKS.md, thirty-third session).
+pub fn may_meet_inside_within(p0: Vec3, p1: Vec3, q0: Vec3, q1: Vec3, thickness: f64) -> bool {
+    let (d1, d2) = (p1 - p0, q1 - q0);
+    let Some((s, t)) = critical_point(d1, d2, p0 - q0) else {
+        return false;
+    };
+    let inside = |u: f64| u > 0.0 && u < 1.0;
+    inside(s) && inside(t) && ((p0 + d1 * s) - (q0 + d2 * t)).length() < thickness
+}
+
 /// Closest points between segments `p0 p1` and `q0 q1`.
 ///
 /// The minimum of the distance over the parameter square is either an interior critical point
@@ -131,12 +162,6 @@ pub fn segment_segment(p0: Vec3, p1: Vec3, q0: Vec3, q1: Vec3) -> EdgeEdge {
     let d1 = p1 - p0;
     let d2 = q1 - q0;
     let r = p0 - q0;
-    let a = d1.length_squared();
-    let e = d2.length_squared();
-    let b = d1.dot(d2);
-    let c = d1.dot(r);
-    let f = d2.dot(r);
-    let denom = a * e - b * b;
     let mut best: Option<EdgeEdge> = None;
     let mut consider = |s: f64, t: f64| {
         let p = p0 + d1 * s;
@@ -146,12 +171,11 @@ pub fn segment_segment(p0: Vec3, p1: Vec3, q0: Vec3, q1: Vec3) -> EdgeEdge {
             best = Some(EdgeEdge { dist, s, t, p, q });
         }
     };
-    if a > 0.0 && e > 0.0 && denom > 1e-14 * a * e {
-        let s = (b * f - c * e) / denom;
-        let t = (a * f - b * c) / denom;
-        if (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t) {
-            consider(s, t);
-        }
+    if let Some((s, t)) = critical_point(d1, d2, r)
+        && (0.0..=1.0).contains(&s)
+        && (0.0..=1.0).contains(&t)
+    {
+        consider(s, t);
     }
     let ps = point_segment(q0, p0, p1);
     consider(ps.t, 0.0);
@@ -281,6 +305,36 @@ mod tests {
             // symmetric in the two segments
             let r2 = segment_segment(q0, q1, p0, p1);
             prop_assert!((r.dist - r2.dist).abs() < 1e-12);
+        }
+
+        /// The quick test never rejects a pair whose closest points are inside both segments
+        /// and closer than the thickness, and with the thickness above that distance it keeps
+        /// every such pair; segments that cross are kept for any positive thickness.
+        #[test]
+        fn the_quick_edge_test_keeps_every_pair_met_inside(
+            p0 in v(), p1 in v(), q0 in v(), q1 in v(), kind in 0..4usize, share in 0.0..2.0f64,
+        ) {
+            let (q0, q1) = match kind {
+                // crossing at an inside point of both
+                0 => {
+                    let m = p0.lerp(p1, 0.37);
+                    (m + (q0 - m) * 0.5, m - (q0 - m) * 0.25)
+                }
+                1 => (q0, q0 + (p1 - p0) * 0.7),
+                2 => (q0, q0),
+                _ => (q0, q1),
+            };
+            let r = segment_segment(p0, p1, q0, q1);
+            let inside = r.s > 0.0 && r.s < 1.0 && r.t > 0.0 && r.t < 1.0;
+            let thickness = r.dist * share + if kind == 0 { 1e-9 } else { 0.0 };
+            if inside && r.dist < thickness {
+                prop_assert!(may_meet_inside_within(p0, p1, q0, q1, thickness));
+            }
+            let (d1, d2) = (p1 - p0, q1 - q0);
+            let apart = d1.cross(d2).length_squared() > 1e-6 * d1.length_squared() * d2.length_squared();
+            if kind == 0 && apart {
+                prop_assert!(inside && may_meet_inside_within(p0, p1, q0, q1, 1e-9));
+            }
         }
     }
 }

@@ -31,7 +31,7 @@
 //! whatever the thread count.
 
 use super::broad_phase::{Aabb, overlapping_pairs_between};
-use super::distance::{point_segment, point_triangle, segment_segment};
+use super::distance::{may_meet_inside_within, point_segment, point_triangle, segment_segment};
 use crate::math::Vec3;
 use rayon::prelude::*;
 use std::collections::{BTreeMap, BTreeSet};
@@ -184,6 +184,9 @@ pub fn obstacle_proximities(
         let [a, b] = edges[e as usize];
         let (p0, p1) = (x[a as usize], x[b as usize]);
         let (q0, q1) = (f.x0[c0 as usize], f.x0[c1 as usize]);
+        if !may_meet_inside_within(p0, p1, q0, q1, margin) {
+            return None;
+        }
         let r = segment_segment(p0, p1, q0, q1);
         let interior = r.s > 0.0 && r.s < 1.0 && r.t > 0.0 && r.t < 1.0;
         (r.dist < margin && interior).then(|| {

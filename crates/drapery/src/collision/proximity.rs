@@ -13,7 +13,7 @@
 //! elements (edges without triangles) therefore only repel in their interiors.
 
 use super::broad_phase::Candidates;
-use super::distance::{point_triangle, segment_segment};
+use super::distance::{may_meet_inside_within, point_triangle, segment_segment};
 use super::repulsion::{edge_edge_weights, point_triangle_weights};
 use crate::math::Vec3;
 use rayon::prelude::*;
@@ -109,7 +109,9 @@ pub fn proximities(
             let (ea, eb) = (edges[e as usize], edges[f as usize]);
             let [p0, p1] = ea.map(|i| x[i as usize]);
             let [q0, q1] = eb.map(|i| x[i as usize]);
-            if !may_be_within(&[p0, p1], &[q0, q1], thickness) {
+            if !may_be_within(&[p0, p1], &[q0, q1], thickness)
+                || !may_meet_inside_within(p0, p1, q0, q1, thickness)
+            {
                 return None;
             }
             let r = segment_segment(p0, p1, q0, q1);
