@@ -73,13 +73,61 @@ impl MovingBox {
         if ids.is_empty() {
             return b;
         }
+        b.grown(scale, r)
+    }
+
+    /// Inflated by `r` and by `1e-12 scale` (see [`MovingBox::of`]).
+    fn grown(mut self, scale: f64, r: f64) -> MovingBox {
         let s = 1e-12 * scale;
         let grow = Vec3::splat(r + s);
-        b.lo -= grow;
-        b.hi += grow;
-        b.dlo -= Vec3::splat(s);
-        b.dhi += Vec3::splat(s);
-        b
+        self.lo -= grow;
+        self.hi += grow;
+        self.dlo -= Vec3::splat(s);
+        self.dhi += Vec3::splat(s);
+        self
+    }
+
+    /// `[MovingBox::of(ids, x0, x1, r), MovingBox::of(ids, x1, x1, r_end)]` (the same bits)
+    /// from one pass over the vertices: the moving box over the step and the box at the end
+    /// positions.
+    pub fn of_and_end(ids: &[u32], x0: &[Vec3], x1: &[Vec3], r: f64, r_end: f64) -> [MovingBox; 2] {
+        let (mut b, mut e) = (MovingBox::EMPTY, MovingBox::EMPTY);
+        let (mut scale, mut scale_end) = (0.0f64, 0.0f64);
+        let (mut moving, mut end) = (true, true);
+        for &i in ids {
+            let (p, q) = (x0[i as usize], x1[i as usize]);
+            let d = q - p;
+            moving &= p.is_finite() && q.is_finite() && d.is_finite();
+            // the end box is `of`'s with `p = q`: its displacement `q - q` is `+0`, finite
+            // exactly when `q` is
+            end &= q.is_finite();
+            b.lo = b.lo.min(p);
+            b.hi = b.hi.max(p);
+            b.dlo = b.dlo.min(d);
+            b.dhi = b.dhi.max(d);
+            let (pa, qa) = (p.abs().max_element(), q.abs().max_element());
+            scale = scale.max(pa).max(qa);
+            e.lo = e.lo.min(q);
+            e.hi = e.hi.max(q);
+            e.dlo = e.dlo.min(Vec3::ZERO);
+            e.dhi = e.dhi.max(Vec3::ZERO);
+            scale_end = scale_end.max(qa).max(qa);
+        }
+        if ids.is_empty() {
+            return [b, e];
+        }
+        [
+            if moving {
+                b.grown(scale, r)
+            } else {
+                MovingBox::EMPTY
+            },
+            if end {
+                e.grown(scale_end, r_end)
+            } else {
+                MovingBox::EMPTY
+            },
+        ]
     }
 
     /// The box holding both.
@@ -678,6 +726,31 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    proptest! {
+        /// One pass for the moving box and the end box gives the two separate boxes' bits,
+        /// non-finite coordinates included.
+        #[test]
+        fn the_moving_and_end_boxes_of_one_pass_are_the_separate_ones(
+            x0 in prop::collection::vec(vec3(), 3), x1 in prop::collection::vec(vec3(), 3),
+            len in 0usize..=3, bad in 0usize..8, r in 0.0..0.1f64, r_end in 0.0..0.1f64,
+        ) {
+            let (mut x0, mut x1) = (x0, x1);
+            // a non-finite start or end coordinate on some cases
+            match bad {
+                0 => x0[0].x = f64::NAN,
+                1 => x1[1].y = f64::INFINITY,
+                2 => x0[2].z = f64::NEG_INFINITY,
+                _ => {}
+            }
+            let ids = [0u32, 1, 2];
+            let ids = &ids[..len];
+            let bits = |b: &MovingBox| [b.lo, b.hi, b.dlo, b.dhi].map(|v| v.to_array().map(f64::to_bits));
+            let [m, e] = MovingBox::of_and_end(ids, &x0, &x1, r, r_end);
+            prop_assert_eq!(bits(&m), bits(&MovingBox::of(ids, &x0, &x1, r)));
+            prop_assert_eq!(bits(&e), bits(&MovingBox::of(ids, &x1, &x1, r_end)));
         }
     }
 

@@ -319,16 +319,20 @@ pub fn failsafe(
     let meet = |a: &[u32], b: &[u32], ye: &[Vec3]| {
         MovingBox::of(a, &ys0, ye, r).meets(&MovingBox::of(b, &ys0, ye, r))
     };
-    // a candidate's hit, keyed as in `Hits`
-    let vt_hit = |(v, t): (u32, u32), ye: &[Vec3]| {
-        meet(&[v], &tris[t as usize], ye)
-            .then(|| impact(vt_ids(v, t), true, ye).map(|h| ((0, v, t), h)))
+    // a candidate's hit, keyed as in `Hits`, given whether its moving boxes meet
+    let vt_hit_if = |meet: bool, (v, t): (u32, u32), ye: &[Vec3]| {
+        meet.then(|| impact(vt_ids(v, t), true, ye).map(|h| ((0, v, t), h)))
             .flatten()
     };
-    let ee_hit = |(e, f): (u32, u32), ye: &[Vec3]| {
-        meet(&all_edges[e as usize], &all_edges[f as usize], ye)
-            .then(|| impact(ee_ids(e, f), false, ye).map(|h| ((1, e, f), h)))
+    let ee_hit_if = |meet: bool, (e, f): (u32, u32), ye: &[Vec3]| {
+        meet.then(|| impact(ee_ids(e, f), false, ye).map(|h| ((1, e, f), h)))
             .flatten()
+    };
+    let vt_hit =
+        |(v, t): (u32, u32), ye: &[Vec3]| vt_hit_if(meet(&[v], &tris[t as usize], ye), (v, t), ye);
+    let ee_hit = |(e, f): (u32, u32), ye: &[Vec3]| {
+        let meet = meet(&all_edges[e as usize], &all_edges[f as usize], ye);
+        ee_hit_if(meet, (e, f), ye)
     };
     let all_hits = |cand: &Candidates, ye: &[Vec3]| -> Hits {
         let vt: Vec<_> = (cand.vt.par_iter())
@@ -350,26 +354,35 @@ pub fn failsafe(
     let mut boxes = SweptBoxes::cached(&ys0, &ye, &tris, &all_edges, margin, cache);
     report.builds += 1;
     let first = boxes.all();
+    let tt = std::time::Instant::now();
     // the first round's hits, and (used when there are none) the cloth's own pairs (cloth
     // vertices, triangles and edges come first) whose boxes at the end positions meet with the
     // thickness as margin: the static broad phase's pairs there, in the same order. The moving
     // boxes of cloth carried along (by a spinning obstacle, say) meet over several edge lengths,
     // and most of those pairs end far apart. One pass for both, so that each pair's positions
     // are read once.
+    // (each primitive's two boxes from one pass over its vertices)
     let (nt, ne) = (triangles.len() as u32, edges.len() as u32);
-    let near = |a: &[u32], b: &[u32]| {
-        let r = 0.5 * margin;
-        MovingBox::of(a, &ye, &ye, r).meets(&MovingBox::of(b, &ye, &ye, r))
+    let meet_and_near = |a: &[u32], b: &[u32], cloth: bool| {
+        let r_end = 0.5 * margin;
+        let [ma, na] = MovingBox::of_and_end(a, &ys0, &ye, r, r_end);
+        let [mb, nb] = MovingBox::of_and_end(b, &ys0, &ye, r, r_end);
+        (ma.meets(&mb), cloth && na.meets(&nb))
     };
     let (vt_hits, vt_near) = scan(&first.vt, |(v, t)| {
-        let near = (v as usize) < n && t < nt && near(&[v], &tris[t as usize]);
-        (vt_hit((v, t), &ye), near)
+        let cloth = (v as usize) < n && t < nt;
+        let (meet, near) = meet_and_near(&[v], &tris[t as usize], cloth);
+        (vt_hit_if(meet, (v, t), &ye), near)
     });
     let (ee_hits, ee_near) = scan(&first.ee, |(a, b)| {
-        let near = b < ne && near(&all_edges[a as usize], &all_edges[b as usize]);
-        (ee_hit((a, b), &ye), near)
+        let (ea, eb) = (&all_edges[a as usize], &all_edges[b as usize]);
+        let (meet, near) = meet_and_near(ea, eb, b < ne);
+        (ee_hit_if(meet, (a, b), &ye), near)
     });
     let mut hits: Hits = vt_hits.into_iter().chain(ee_hits).collect();
+    if std::env::var("TMP_FS").is_ok() {
+        eprintln!("scan {:.2}", tt.elapsed().as_secs_f64() * 1e3);
+    }
     if hits.is_empty() {
         report.pairs = Some(Candidates {
             vt: vt_near,
