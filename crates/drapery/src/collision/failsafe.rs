@@ -354,14 +354,12 @@ pub fn failsafe(
     let mut boxes = SweptBoxes::cached(&ys0, &ye, &tris, &all_edges, margin, cache);
     report.builds += 1;
     let first = boxes.all();
-    let tt = std::time::Instant::now();
     // the first round's hits, and (used when there are none) the cloth's own pairs (cloth
     // vertices, triangles and edges come first) whose boxes at the end positions meet with the
     // thickness as margin: the static broad phase's pairs there, in the same order. The moving
     // boxes of cloth carried along (by a spinning obstacle, say) meet over several edge lengths,
     // and most of those pairs end far apart. One pass for both, so that each pair's positions
-    // are read once.
-    // (each primitive's two boxes from one pass over its vertices)
+    // are read once, and each primitive's two boxes come from one pass over its vertices.
     let (nt, ne) = (triangles.len() as u32, edges.len() as u32);
     let meet_and_near = |a: &[u32], b: &[u32], cloth: bool| {
         let r_end = 0.5 * margin;
@@ -380,9 +378,6 @@ pub fn failsafe(
         (ee_hit_if(meet, (a, b), &ye), near)
     });
     let mut hits: Hits = vt_hits.into_iter().chain(ee_hits).collect();
-    if std::env::var("TMP_FS").is_ok() {
-        eprintln!("scan {:.2}", tt.elapsed().as_secs_f64() * 1e3);
-    }
     if hits.is_empty() {
         report.pairs = Some(Candidates {
             vt: vt_near,
