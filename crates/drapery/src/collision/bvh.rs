@@ -109,13 +109,14 @@ impl MovingBox {
             scale = scale.max(pa).max(qa);
             e.lo = e.lo.min(q);
             e.hi = e.hi.max(q);
-            e.dlo = e.dlo.min(Vec3::ZERO);
-            e.dhi = e.dhi.max(Vec3::ZERO);
-            scale_end = scale_end.max(qa).max(qa);
+            // (`of`'s `scale.max(qa).max(qa)`: `max` is idempotent)
+            scale_end = scale_end.max(qa);
         }
         if ids.is_empty() {
             return [b, e];
         }
+        // the displacements' bounds, `min`/`max` of the `+0`s
+        (e.dlo, e.dhi) = (Vec3::ZERO, Vec3::ZERO);
         [
             if moving {
                 b.grown(scale, r)
