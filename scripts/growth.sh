@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# Issue 18's growth criterion: how much the time per vertex per step grows from spin-129 to
+# spin-290 (the rotating sphere at two resolutions), measured on whole runs of the command.
+#
+#   scripts/growth.sh [PAIRS] [DRAPERY]
+#
+# Writes both scenes (100 frames, `drapery bench --write-scenes`), then runs them PAIRS times
+# (default 3), alternating the sizes so that both see the machine in the same state, each as
+# `drapery run SCENE --output DIR --format ply --quiet` (the frames are deleted after each run).
+# Prints each run's wall time, seconds per step and peak memory, each pair's growth
+#
+#   (t_290 / 290²) / (t_129 / 129²)
+#
+# and the median of the pairs. DRAPERY defaults to target/release/drapery; FRAMES in the
+# environment runs fewer frames (4 steps each). The machine should be otherwise idle: a single
+# pair can be off by 10 %, which is why the pairs are alternated and their median is printed.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+pairs=${1:-3}
+drapery=${2:-$root/target/release/drapery}
+frames=${FRAMES:-100}
+case $frames in
+'' | *[!0-9]* | 0) echo "growth.sh: FRAMES must be a positive whole number, not '$frames'" >&2; exit 2 ;;
+esac
+case $pairs in
+'' | *[!0-9]* | 0) echo "growth.sh: PAIRS must be a positive whole number, not '$pairs'" >&2; exit 2 ;;
+esac
+[ -x "$drapery" ] || { echo "growth.sh: $drapery is not an executable (build it: cargo build --release -p drapery-cli)" >&2; exit 2; }
+work=$(mktemp -d "${TMPDIR:-/tmp}/drapery-growth.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+if ! "$drapery" bench --scenes spin-129,spin-290 --frames "$frames" --write-scenes "$work" >"$work/log" 2>&1; then
+  echo "growth.sh: $drapery bench --write-scenes failed: $(tail -n1 "$work/log")" >&2
+  exit 1
+fi
+steps=$((4 * frames))
+have_time=false
+[ -x /usr/bin/time ] && have_time=true
+
+# run N: prints "SECONDS PEAK_MB"
+run() {
+  local out=$work/out-$1
+  rm -rf "$out"
+  local t0 t1 peak=-
+  t0=$(date +%s.%N)
+  local cmd=("$drapery" run "$work/spin-$1.toml" --output "$out" --format ply --quiet)
+  if $have_time; then
+    if ! /usr/bin/time -o "$work/time" -f '%M' "${cmd[@]}" >"$work/log" 2>&1; then
+      echo "growth.sh: spin-$1 failed: $(tail -n1 "$work/log")" >&2
+      return 1
+    fi
+    peak=$(awk '{ k = $1 } END { printf "%.0f", k / 1024 }' "$work/time")
+  elif ! "${cmd[@]}" >"$work/log" 2>&1; then
+    echo "growth.sh: spin-$1 failed: $(tail -n1 "$work/log")" >&2
+    return 1
+  fi
+  t1=$(date +%s.%N)
+  rm -rf "$out"
+  awk -v a="$t0" -v b="$t1" -v p="$peak" 'BEGIN { printf "%.2f %s\n", b - a, p }'
+}
+
+echo "spin-129 and spin-290, $frames frames ($steps steps) each, $pairs pairs, $(nproc) threads"
+ratios=()
+for k in $(seq 1 "$pairs"); do
+  # alternate which size goes first
+  if [ $((k % 2)) -eq 1 ]; then order="129 290"; else order="290 129"; fi
+  declare -A t=()
+  for n in $order; do
+    res=$(run "$n") || exit 1
+    read -r secs peak <<<"$res"
+    t[$n]=$secs
+    awk -v n="$n" -v s="$secs" -v st="$steps" -v p="$peak" \
+      'BEGIN { printf "  pair %s  spin-%s  %8.2f s  %.4f s/step  peak %s MB\n", "'"$k"'", n, s, s / st, p }'
+  done
+  r=$(awk -v a="${t[129]}" -v b="${t[290]}" 'BEGIN { printf "%.3f", (b / (290 * 290)) / (a / (129 * 129)) }')
+  ratios+=("$r")
+  echo "  pair $k  growth per vertex per step ${r}x"
+  unset t
+done
+median=$(printf '%s\n' "${ratios[@]}" | sort -g | awk '{ v[NR] = $1 } END { if (NR % 2) print v[(NR + 1) / 2]; else printf "%.3f\n", (v[NR / 2] + v[NR / 2 + 1]) / 2 }')
+echo "growth per vertex per step: ${ratios[*]}; median ${median}x (issue 18 asks at most 1.3x)"
