@@ -21,6 +21,7 @@
 //! The traversals return their pairs sorted, so the result does not depend on the tree's shape
 //! or on the number of threads.
 
+use super::pair_sort::sort_pairs;
 use crate::math::Vec3;
 use rayon::prelude::*;
 
@@ -406,7 +407,7 @@ impl Bvh {
         if !self.prims.is_empty() {
             self.within(self.root(), keep, &mut out);
         }
-        out.par_sort_unstable();
+        sort_pairs(&mut out);
         out
     }
 
@@ -423,7 +424,7 @@ impl Bvh {
             let both = Both { a: self, b: other };
             both.between(self.root(), other.root(), keep, &mut out);
         }
-        out.par_sort_unstable();
+        sort_pairs(&mut out);
         out
     }
 

@@ -5,7 +5,8 @@
 //! degenerate input (zero-length edges and zero-area triangles are handled explicitly and never
 //! produce NaN from finite input). The implicit step wires these pieces together:
 //!
-//! * [`broad_phase`] finds vertex–triangle and edge–edge candidates from swept boxes;
+//! * [`broad_phase`] finds vertex–triangle and edge–edge candidates from swept boxes
+//!   (`bvh`'s trees; `pair_sort` puts their pairs in order);
 //! * [`distance`] gives closest points and the barycentric weights of a contact;
 //! * [`proximity`] turns candidates into contact stencils (particle indices and weights);
 //! * [`repulsion`] turns a close pair into forces and a 12×12 Jacobian (docs/MATH.md §4);
@@ -30,6 +31,7 @@ pub mod failsafe;
 pub mod frame_check;
 pub mod friction;
 pub mod obstacle_proximity;
+mod pair_sort;
 pub mod predicates;
 pub mod proximity;
 pub mod repulsion;
