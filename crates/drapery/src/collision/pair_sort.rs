@@ -3,11 +3,11 @@
 //!
 //! The traversals of [`super::bvh`] list their pairs in an order that depends on the tree and
 //! sort them, so that what follows does not. At 290² a fail-safe step lists about 340 000 pairs,
-//! and a comparison sort of them took about 5 ms of the step on two threads, this sort about 2 ms
-//! on one (BENCHMARKS.md, thirty-fifth session). A pair `(p, q)` is the key `p · 2^b + q` with `b` the bits of the
-//! largest `q`, and the keys are sorted in passes of [`DIGIT`] bits, each a stable counting sort.
-//! The result is the same as [`slice::sort_unstable`]'s for any list (equal pairs are
-//! interchangeable), so it changes no result.
+//! and a comparison sort of them took about 5 ms of the step on two threads, this sort about
+//! 2 ms on one (BENCHMARKS.md, thirty-fifth session). A pair `(p, q)` is the key `p · 2^b + q`
+//! with `b` the bits of the largest `q`, and the keys are sorted in passes of [`DIGIT`] bits,
+//! each a stable counting sort. The result is the same as [`slice::sort_unstable`]'s for any
+//! list (equal pairs are interchangeable), so it changes no result.
 
 use rayon::prelude::*;
 
@@ -18,7 +18,7 @@ const DIGIT: u32 = 12;
 const SMALL: usize = 4096;
 
 /// Sorts `pairs` in increasing order, `(p, q)` by `p` then `q`.
-pub fn sort_pairs(pairs: &mut Vec<(u32, u32)>) {
+pub fn sort_pairs(pairs: &mut [(u32, u32)]) {
     if pairs.len() < SMALL {
         pairs.sort_unstable();
         return;
