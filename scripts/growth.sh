@@ -12,9 +12,10 @@
 #   (t_290 / 290²) / (t_129 / 129²)
 #
 # the median of the pairs, and the growth between the two sizes' median runs (how the runs are
-# combined moves the answer by a few per cent: BENCHMARKS.md, thirty-fifth session). DRAPERY defaults to target/release/drapery; FRAMES in the
-# environment runs fewer frames (4 steps each). The machine should be otherwise idle: a single
-# pair can be off by 10 %, which is why the pairs are alternated and their median is printed.
+# combined moves the answer by a few per cent: BENCHMARKS.md, thirty-fifth session). DRAPERY
+# defaults to target/release/drapery; FRAMES in the environment runs fewer frames (4 steps
+# each). The machine should be otherwise idle: a single pair can be off by 10 %, which is why
+# the pairs are alternated and their median is printed.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 pairs=${1:-3}
@@ -59,6 +60,10 @@ run() {
   awk -v a="$t0" -v b="$t1" -v p="$peak" 'BEGIN { printf "%.2f %s\n", b - a, p }'
 }
 
+# growth T129 T290: the time per vertex per step of spin-290 over spin-129's
+growth() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.3f", (b / (290 * 290)) / (a / (129 * 129)) }'; }
+median() { printf '%s\n' "$@" | sort -g | awk '{ v[NR] = $1 } END { if (NR % 2) print v[(NR + 1) / 2]; else print (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
+
 echo "spin-129 and spin-290, $frames frames ($steps steps) each, $pairs pairs, $(nproc) threads"
 ratios=()
 times129=()
@@ -66,23 +71,18 @@ times290=()
 for k in $(seq 1 "$pairs"); do
   # alternate which size goes first
   if [ $((k % 2)) -eq 1 ]; then order="129 290"; else order="290 129"; fi
-  declare -A t=()
   for n in $order; do
     res=$(run "$n") || exit 1
     read -r secs peak <<<"$res"
-    t[$n]=$secs
-    awk -v n="$n" -v s="$secs" -v st="$steps" -v p="$peak" \
-      'BEGIN { printf "  pair %s  spin-%s  %8.2f s  %.4f s/step  peak %s MB\n", "'"$k"'", n, s, s / st, p }'
+    if [ "$n" = 129 ]; then times129+=("$secs"); else times290+=("$secs"); fi
+    awk -v k="$k" -v n="$n" -v s="$secs" -v st="$steps" -v p="$peak" \
+      'BEGIN { printf "  pair %s  spin-%s  %8.2f s  %.4f s/step  peak %s MB\n", k, n, s, s / st, p }'
   done
-  times129+=("${t[129]}")
-  times290+=("${t[290]}")
-  r=$(awk -v a="${t[129]}" -v b="${t[290]}" 'BEGIN { printf "%.3f", (b / (290 * 290)) / (a / (129 * 129)) }')
+  r=$(growth "${times129[-1]}" "${times290[-1]}")
   ratios+=("$r")
   echo "  pair $k  growth per vertex per step ${r}x"
-  unset t
 done
-median() { printf '%s\n' "$@" | sort -g | awk '{ v[NR] = $1 } END { if (NR % 2) print v[(NR + 1) / 2]; else print (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
 median_ratio=$(awk -v m="$(median "${ratios[@]}")" 'BEGIN { printf "%.3f", m }')
-of_medians=$(awk -v a="$(median "${times129[@]}")" -v b="$(median "${times290[@]}")" 'BEGIN { printf "%.3f", (b / (290 * 290)) / (a / (129 * 129)) }')
+of_medians=$(growth "$(median "${times129[@]}")" "$(median "${times290[@]}")")
 echo "growth per vertex per step: ${ratios[*]}; median ${median_ratio}x (issue 18 asks at most 1.3x)"
 echo "the same from the median run of each size: ${of_medians}x"
