@@ -303,8 +303,8 @@ impl Bvh {
 
     /// Sets the vertices of each primitive (`of(i)` for primitive `i`; a vertex `[v, v, v]`, an
     /// edge `[a, b, b]`): the traversals then leave out the pairs that share a vertex, before
-    /// `keep` and the box test. Read in leaf order, next to the boxes, this costs less than
-    /// looking the primitives up in the mesh for each pair (a `keep` that does so).
+    /// the box test and `keep`. Read in leaf order, next to the boxes, this costs less than
+    /// looking the primitives up in the mesh for each pair.
     pub fn set_vertices(&mut self, of: impl Fn(u32) -> [u32; 3] + Sync) {
         self.vertices = self
             .order
@@ -400,8 +400,9 @@ impl Bvh {
     }
 
     /// The pairs `(i, j)` of primitives of this tree whose moving boxes meet, `i < j` by
-    /// primitive index, for which `keep(i, j)` is true, sorted (with marks: only pairs with a
-    /// marked primitive; with vertices set, only pairs that share none).
+    /// primitive index, for which `keep(i, j)` is true (asked only of pairs whose boxes meet),
+    /// sorted (with marks: only pairs with a marked primitive; with vertices set, only pairs
+    /// that share none).
     pub fn self_pairs<K: Fn(u32, u32) -> bool + Sync>(&self, keep: &K) -> Vec<(u32, u32)> {
         let mut out = Vec::new();
         if !self.prims.is_empty() {
@@ -412,8 +413,9 @@ impl Bvh {
     }
 
     /// The pairs `(i, j)`, `i` of this tree's primitives and `j` of `other`'s, whose moving
-    /// boxes meet and for which `keep(i, j)` is true, sorted (with marks on either tree: only
-    /// pairs with a marked primitive; with vertices set on both, only pairs that share none).
+    /// boxes meet and for which `keep(i, j)` is true (asked only of pairs whose boxes meet),
+    /// sorted (with marks on either tree: only pairs with a marked primitive; with vertices set
+    /// on both, only pairs that share none).
     pub fn pairs_with<K: Fn(u32, u32) -> bool + Sync>(
         &self,
         other: &Bvh,
@@ -497,9 +499,9 @@ impl Both<'_> {
         } else {
             (p, q)
         };
-        // `keep` before the box test: an index test (most pairs of neighbouring boxes are
-        // neighbours in the mesh, which the shared vertices above or `keep` drop)
-        if keep(p, q) && a.prims[i].meets(&b.prims[j]) {
+        // `keep` after the box test: it may be a geometric test dearer than the box
+        // ([`super::broad_phase::SweptBoxes::close`])
+        if a.prims[i].meets(&b.prims[j]) && keep(p, q) {
             out.push((p, q));
         }
     }

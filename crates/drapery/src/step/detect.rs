@@ -130,7 +130,8 @@ pub(crate) fn contacts(
         let cand = match known {
             Some(k) => k,
             None => {
-                found = SweptBoxes::cached(x0, x0, triangles, edges, c.thickness, cache).all();
+                let boxes = SweptBoxes::cached(x0, x0, triangles, edges, c.thickness, cache);
+                found = boxes.close(x0, x0);
                 builds = 1;
                 &found
             }
