@@ -14,8 +14,10 @@
 # the median of the pairs, and the growth between the two sizes' median runs (how the runs are
 # combined moves the answer by a few per cent: BENCHMARKS.md, thirty-fifth session). DRAPERY
 # defaults to target/release/drapery; FRAMES in the environment runs fewer frames (4 steps
-# each). The machine should be otherwise idle: a single pair can be off by 10 %, which is why
-# the pairs are alternated and their median is printed.
+# each), THREADS another number of solver threads than the cores (`drapery run --threads`: on
+# one core the growth is smaller, BENCHMARKS.md, thirty-sixth session). The machine should be
+# otherwise idle: a single pair can be off by 10 %, which is why the pairs are alternated and
+# their median is printed.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 pairs=${1:-3}
@@ -26,6 +28,10 @@ case $frames in
 esac
 case $pairs in
 '' | *[!0-9]* | 0) echo "growth.sh: PAIRS must be a positive whole number, not '$pairs'" >&2; exit 2 ;;
+esac
+threads=${THREADS:-$(nproc)}
+case $threads in
+'' | *[!0-9]* | 0) echo "growth.sh: THREADS must be a positive whole number, not '$threads'" >&2; exit 2 ;;
 esac
 [ -x "$drapery" ] || { echo "growth.sh: $drapery is not an executable (build it: cargo build --release -p drapery-cli)" >&2; exit 2; }
 work=$(mktemp -d "${TMPDIR:-/tmp}/drapery-growth.XXXXXX")
@@ -44,7 +50,7 @@ run() {
   rm -rf "$out"
   local t0 t1 peak=-
   t0=$(date +%s.%N)
-  local cmd=("$drapery" run "$work/spin-$1.toml" --output "$out" --format ply --quiet)
+  local cmd=("$drapery" run "$work/spin-$1.toml" --output "$out" --format ply --quiet --threads "$threads")
   if $have_time; then
     if ! /usr/bin/time -o "$work/time" -f '%M' "${cmd[@]}" >"$work/log" 2>&1; then
       echo "growth.sh: spin-$1 failed: $(tail -n1 "$work/log")" >&2
@@ -64,7 +70,7 @@ run() {
 growth() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.3f", (b / (290 * 290)) / (a / (129 * 129)) }'; }
 median() { printf '%s\n' "$@" | sort -g | awk '{ v[NR] = $1 } END { if (NR % 2) print v[(NR + 1) / 2]; else print (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
 
-echo "spin-129 and spin-290, $frames frames ($steps steps) each, $pairs pairs, $(nproc) threads"
+echo "spin-129 and spin-290, $frames frames ($steps steps) each, $pairs pairs, $threads threads"
 ratios=()
 times129=()
 times290=()
