@@ -287,12 +287,18 @@ pub fn stay_apart(a: &[u32], b: &[u32], x0: &[Vec3], x1: &[Vec3], margin: f64) -
             return true;
         }
     }
-    let end = match (a, b) {
-        ([v], [t0, t1, t2]) => point_triangle(p(v), p(t0), p(t1), p(t2)).dist,
-        ([a0, a1], [b0, b1]) => segment_segment(p(a0), p(a1), p(b0), p(b1)).dist,
-        _ => return false,
-    };
-    end > limit
+    distance(a, b, |i| x1[i as usize]).is_some_and(|end| end > limit)
+}
+
+/// The distance between the primitives with vertices `a` and `b`, a vertex and a triangle or
+/// two edges, with vertex `i` at `x(i)` (the narrow phase's [`point_triangle`] and
+/// [`segment_segment`]); `None` for other shapes.
+pub(crate) fn distance(a: &[u32], b: &[u32], x: impl Fn(u32) -> Vec3) -> Option<f64> {
+    match (a, b) {
+        ([v], [t0, t1, t2]) => Some(point_triangle(x(*v), x(*t0), x(*t1), x(*t2)).dist),
+        ([a0, a1], [b0, b1]) => Some(segment_segment(x(*a0), x(*a1), x(*b0), x(*b1)).dist),
+        _ => None,
+    }
 }
 
 /// All pairs `(i, j)`, `i < j`, of overlapping boxes, sorted.
@@ -706,12 +712,8 @@ mod tests {
     fn sampled_distance(a: &[u32], b: &[u32], x0: &[Vec3], x1: &[Vec3]) -> f64 {
         (0..=16)
             .map(|k| {
-                let p = |i: &u32| x0[*i as usize].lerp(x1[*i as usize], k as f64 / 16.0);
-                match (a, b) {
-                    ([v], [t0, t1, t2]) => point_triangle(p(v), p(t0), p(t1), p(t2)).dist,
-                    ([a0, a1], [b0, b1]) => segment_segment(p(a0), p(a1), p(b0), p(b1)).dist,
-                    _ => unreachable!(),
-                }
+                let at = |i: u32| x0[i as usize].lerp(x1[i as usize], k as f64 / 16.0);
+                distance(a, b, at).expect("a vertex and a triangle, or two edges")
             })
             .fold(f64::INFINITY, f64::min)
     }

@@ -654,16 +654,12 @@ mod tests {
         c: &Candidates,
         thickness: f64,
     ) -> Candidates {
-        use crate::collision::distance::{point_triangle, segment_segment};
-        let p = |i: u32| x[i as usize];
-        let vt = |&(v, t): &(u32, u32)| {
-            let [a, b, c] = tris[t as usize];
-            point_triangle(p(v), p(a), p(b), p(c)).dist <= thickness
+        use crate::collision::broad_phase::distance;
+        let near = |a: &[u32], b: &[u32]| {
+            distance(a, b, |i| x[i as usize]).is_some_and(|d| d <= thickness)
         };
-        let ee = |&(e, f): &(u32, u32)| {
-            let ([a, b], [c, d]) = (edges[e as usize], edges[f as usize]);
-            segment_segment(p(a), p(b), p(c), p(d)).dist <= thickness
-        };
+        let vt = |&(v, t): &(u32, u32)| near(&[v], &tris[t as usize]);
+        let ee = |&(e, f): &(u32, u32)| near(&edges[e as usize], &edges[f as usize]);
         Candidates {
             vt: c.vt.iter().copied().filter(vt).collect(),
             ee: c.ee.iter().copied().filter(ee).collect(),
