@@ -638,7 +638,7 @@ mod tests {
             if let Some(p) = r.pairs {
                 let listed = candidates(&x1, &x1, &tris, &edges, thickness);
                 let within = within(&x1, &tris, &edges, &listed, thickness);
-                prop_assert!(holds(&listed, &p) && holds(&p, &within));
+                prop_assert!(listed.holds(&p) && p.holds(&within));
                 if depth == 0.0 {
                     prop_assert!(!within.vt.is_empty());
                 }
@@ -664,15 +664,6 @@ mod tests {
             vt: c.vt.iter().copied().filter(vt).collect(),
             ee: c.ee.iter().copied().filter(ee).collect(),
         }
-    }
-
-    /// Whether every pair of `part` is in `whole` (both sorted).
-    fn holds(whole: &Candidates, part: &Candidates) -> bool {
-        let sorted = |c: &Candidates| c.vt.is_sorted() && c.ee.is_sorted();
-        sorted(whole)
-            && sorted(part)
-            && part.vt.iter().all(|q| whole.vt.binary_search(q).is_ok())
-            && part.ee.iter().all(|q| whole.ee.binary_search(q).is_ok())
     }
 
     #[test]
@@ -701,7 +692,7 @@ mod tests {
         let listed = candidates(&x1, &x1, &tris, &edges, 0.01);
         let within = within(&x1, &tris, &edges, &listed, 0.01);
         assert!(!within.vt.is_empty() && !within.ee.is_empty());
-        assert!(holds(&listed, &p) && holds(&p, &within));
+        assert!(listed.holds(&p) && p.holds(&within));
         // at rest the pairs passed on are exactly those within the thickness
         assert_eq!(p, within);
     }
