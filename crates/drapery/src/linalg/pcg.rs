@@ -150,23 +150,23 @@ pub fn solve_split(
         prepare(p, s, settings, w, &mut stats);
         prepared = true;
     }
-    // Reference residual: the zero guess on the free part (`z` is zero but at the constrained
-    // particles, so only the rows that reach one of them are multiplied).
-    a.mul_vec_sparse(z, &mut w.q);
-    filtered_residual(s, b, &w.q, &mut w.r);
-    let r0 = dot(&w.r, &w.r).sqrt();
     // x = z + S x_guess
     x.par_iter_mut()
         .enumerate()
         .with_min_len(CHUNK)
         .for_each(|(i, xi)| *xi = z[i] + s[i] * *xi);
+    // The reference residual, of the zero guess on the free part (`z` is zero but at the
+    // constrained particles, so only the rows that reach one of them are multiplied), and the
+    // guess's, from one pass over the matrix.
+    a.mul_vec_both(z, x, &mut w.s, &mut w.q);
+    filtered_residual(s, b, &w.s, &mut w.r);
+    let r0 = dot(&w.r, &w.r).sqrt();
     if r0 == 0.0 || !r0.is_finite() {
         x.copy_from_slice(z);
         stats.relative_residual = if r0 == 0.0 { 0.0 } else { f64::NAN };
         stats.converged = r0 == 0.0;
         return stats;
     }
-    a.mul_vec(x, &mut w.q);
     filtered_residual(s, b, &w.q, &mut w.r);
     let target = settings.tolerance * r0;
     let mut rnorm = dot(&w.r, &w.r).sqrt();
