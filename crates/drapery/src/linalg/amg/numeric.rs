@@ -34,10 +34,10 @@ pub(super) fn refresh(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3], bound: bo
 /// [`Multigrid::refresh_fine`]: the finest level's filtered matrix and the inverses of its
 /// diagonal blocks only; the smoother's damping is the last full refresh's.
 ///
-/// Only the rows that the filters changed since the last refresh reach are recomputed: a block
-/// `(i, j)` of `S A S + D_c (I - S)` depends on `A_ij`, `S_i` and `S_j` alone, and a diagonal
-/// inverse on its own row's, so with `a` unchanged the result is the same bits as recomputing
-/// every row. Filters are compared by their bits.
+/// Only the blocks `(i, j)` with a filter `S_i` or `S_j` changed since the last refresh are
+/// recomputed: a block of `S A S + D_c (I - S)` depends on `A_ij`, `S_i` and `S_j` alone, and a
+/// diagonal inverse on its own row's, so with `a` unchanged the result is the same bits as
+/// recomputing every row. Filters are compared by their bits.
 pub(super) fn refresh_fine(mg: &mut Multigrid, a: &BlockMatrix, s: &[Mat3]) {
     let fine = &mut mg.levels[0];
     if mg.fine_filter.len() == s.len() {
@@ -73,9 +73,9 @@ fn bits(m: &Mat3) -> [u64; 9] {
 }
 
 /// `out = S A S + D_c (I - S)` (see [`constrained_scale`]) block by block (`out` has the
-/// pattern of `a`), and its upper triangle into `upper` in the same pass. With `changed`,
-/// only the rows of the particles it marks and of their neighbours are written (the others
-/// are left as they are).
+/// pattern of `a`), and its upper triangle into `upper` in the same pass. With `changed`, only
+/// the blocks `(i, j)` with `i` or `j` marked are written (the others are left as they are):
+/// the rows of the marked particles, and their columns in their neighbours' rows.
 fn filter_matrix(
     a: &BlockMatrix,
     s: &[Mat3],
@@ -116,6 +116,14 @@ fn filter_matrix(
                 }
                 for (&j, k) in cols.iter().zip(r) {
                     let j = j as usize;
+                    if let Some(c) = changed
+                        && !c[i]
+                        && !c[j]
+                    {
+                        // a block between two unchanged filters keeps its value
+                        at += (j >= i) as usize;
+                        continue;
+                    }
                     let m = a.values[k];
                     let mut f = match (kind[i], kind[j]) {
                         (0, 0) => m,
