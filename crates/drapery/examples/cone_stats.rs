@@ -20,10 +20,10 @@
 //! from the environment, default 1e-9, when set). A vertex or an edge belongs to its first
 //! incident triangle.
 
+mod common;
+
 use drapery::Vec3;
 use drapery::collision::broad_phase::candidates;
-use drapery::presets::Preset;
-use drapery::snapshot::Snapshot;
 
 /// Leaves of at most this many triangles.
 const LEAF: usize = 8;
@@ -104,8 +104,6 @@ fn lca(mut start: usize, mut len: usize, a: usize, b: usize) -> (usize, usize) {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let n: usize = args.get(1).ok_or("usage: cone_stats N FILE...")?.parse()?;
-    let preset = Preset::Spin;
-    let (h, _) = preset.step();
     // a node is flat when every normal is within this cosine of its axis (CONE_COS; default
     // just above 0: a half-angle under 90°)
     let cos: f64 = match std::env::var("CONE_COS") {
@@ -114,15 +112,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     println!("state pairs vt ee flat_vt flat_ee share flat_nodes_of_size(>=64,>=1024,>=16384)");
     for file in &args[2..] {
-        let mut sim = preset.simulation(n, 1e-3)?;
-        sim.restore_snapshot(&Snapshot::from_bytes(&std::fs::read(file)?)?)?;
-        let thickness = sim.model().collision().map_or(0.0, |c| c.thickness);
-        let x0 = sim.positions().to_vec();
-        let x1: Vec<Vec3> = x0
-            .iter()
-            .zip(sim.velocities())
-            .map(|(x, v)| *x + h * *v)
-            .collect();
+        let common::SpinMotion {
+            sim,
+            thickness,
+            x0,
+            x1,
+        } = common::spin_motion(n, file)?;
         let tris = sim.model().triangles();
         let edges = sim.model().edges();
         let cand = candidates(&x0, &x1, &tris, &edges, thickness);

@@ -11,10 +11,9 @@
 //! `close` keeps and the pairs whose boxes meet. The difference between the thickness and
 //! the tolerance alone is what the thickness costs the traversal.
 
-use drapery::Vec3;
+mod common;
+
 use drapery::collision::broad_phase::SweptBoxes;
-use drapery::presets::Preset;
-use drapery::snapshot::Snapshot;
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -23,17 +22,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Err("usage: margin_cost N FILE".into());
     };
     let n: usize = n.parse()?;
-    let preset = Preset::Spin;
-    let (h, _) = preset.step();
-    let mut sim = preset.simulation(n, 1e-3)?;
-    sim.restore_snapshot(&Snapshot::from_bytes(&std::fs::read(file)?)?)?;
-    let thickness = sim.model().collision().map_or(0.0, |c| c.thickness);
-    let x0 = sim.positions().to_vec();
-    let x1: Vec<Vec3> = x0
-        .iter()
-        .zip(sim.velocities())
-        .map(|(x, v)| *x + h * *v)
-        .collect();
+    let common::SpinMotion {
+        sim,
+        thickness,
+        x0,
+        x1,
+    } = common::spin_motion(n, file)?;
     let (tris, edges) = (sim.model().triangles(), sim.model().edges());
     let cases = [
         ("thickness", thickness, false),
