@@ -22,13 +22,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Err("usage: margin_cost N FILE".into());
     };
     let n: usize = n.parse()?;
-    let common::SpinMotion {
-        sim,
-        thickness,
-        x0,
-        x1,
-    } = common::spin_motion(n, file)?;
-    let (tris, edges) = (sim.model().triangles(), sim.model().edges());
+    let state = common::spin_motion(n, file)?;
+    let (thickness, x0, x1) = (state.thickness, &state.x0, &state.x1);
+    let (tris, edges) = (state.sim.model().triangles(), state.sim.model().edges());
     let cases = [
         ("thickness", thickness, false),
         ("half the thickness", 0.5 * thickness, false),
@@ -36,14 +32,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("thickness, end boxes", thickness, true),
     ];
     for (name, margin, at_end) in cases {
-        let start = if at_end { &x1 } else { &x0 };
+        let start = if at_end { x1 } else { x0 };
         let mut times = Vec::new();
         let mut counts = (0, 0);
         for _ in 0..7 {
             let t0 = Instant::now();
-            let boxes = SweptBoxes::new(start, &x1, &tris, &edges, margin);
+            let boxes = SweptBoxes::new(start, x1, &tris, &edges, margin);
             let t1 = Instant::now();
-            let close = boxes.close(start, &x1);
+            let close = boxes.close(start, x1);
             let t2 = Instant::now();
             let all = boxes.all();
             times.push([t1 - t0, t2 - t1].map(|d| d.as_secs_f64() * 1e3));
