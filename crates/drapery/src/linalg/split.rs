@@ -146,53 +146,34 @@ impl<'a> Split<'a> {
             .for_each(|(i, yi)| *yi = self.row_product(i, x));
     }
 
-    /// `y = A x` for an `x` that is zero at most particles (the prescribed changes of the
-    /// constrained ones, say): a row whose columns all hold zeros of `x` is set to zero without
-    /// being multiplied, the others as [`Split::mul_vec`] does them. The same bits as
-    /// [`Split::mul_vec`] for a finite `A`: a row product starts from `+0` and adding `±0`
-    /// keeps it `+0`. The test reads a row's column indices, 4 bytes a block against the block's 72.
-    pub fn mul_vec_sparse(&self, x: &[Vec3], y: &mut [Vec3]) {
-        let reaches = self.reaches(x);
-        y.par_iter_mut()
-            .enumerate()
-            .with_min_len(ROWS)
-            .for_each(|(i, yi)| *yi = self.sparse_row_product(&reaches, i, x));
-    }
-
-    /// `yz = A z` as [`Split::mul_vec_sparse`] gives it and `yx = A x` as [`Split::mul_vec`]
-    /// gives it (the same bits), in one pass over the rows: a row's blocks, streamed from
-    /// memory for the one product, are in the cache for the other. What each linear solve
-    /// starts with (its reference residual and its initial guess's).
+    /// `yz = A z` and `yx = A x` in one pass over the rows, for a `z` that is zero at most
+    /// particles (the prescribed changes of the constrained ones, say): what each linear solve
+    /// starts with (its reference residual and its initial guess's). A row's blocks, streamed
+    /// from memory for the one product, are in the cache for the other. A row of `A z` whose
+    /// columns all hold zeros of `z` is set to zero without being multiplied (the test reads
+    /// its column indices, 4 bytes a block against the block's 72). Both are the bits of
+    /// [`Split::mul_vec`] for a finite `A`: a row product starts from `+0`, and adding `±0`
+    /// keeps it `+0`.
     pub fn mul_vec_both(&self, z: &[Vec3], x: &[Vec3], yz: &mut [Vec3], yx: &mut [Vec3]) {
-        let reaches = self.reaches(z);
+        let nonzero: Vec<bool> = z
+            .par_iter()
+            .with_min_len(4 * ROWS)
+            .map(|v| *v != Vec3::ZERO)
+            .collect();
+        let reaches = |m: &BlockMatrix, i: usize| m.row(i).0.iter().any(|&j| nonzero[j as usize]);
         yz.par_iter_mut()
             .zip(yx.par_iter_mut())
             .enumerate()
             .with_min_len(ROWS)
             .for_each(|(i, (a, b))| {
-                *a = self.sparse_row_product(&reaches, i, z);
+                let c = self.coupling.is_some_and(|c| reaches(&c.m, i));
+                *a = if c || reaches(self.p, i) {
+                    self.row_product(i, z)
+                } else {
+                    Vec3::ZERO
+                };
                 *b = self.row_product(i, x);
             });
-    }
-
-    /// Which entries of `x` are not zero ([`Split::sparse_row_product`]).
-    fn reaches(&self, x: &[Vec3]) -> Vec<bool> {
-        x.par_iter()
-            .with_min_len(4 * ROWS)
-            .map(|v| *v != Vec3::ZERO)
-            .collect()
-    }
-
-    /// Row `i` of `A x`, or zero without the products when no column of the row holds a
-    /// non-zero of `x` (`nonzero`, from [`Split::reaches`]).
-    #[inline]
-    fn sparse_row_product(&self, nonzero: &[bool], i: usize, x: &[Vec3]) -> Vec3 {
-        let reaches = |m: &BlockMatrix| m.row(i).0.iter().any(|&j| nonzero[j as usize]);
-        if self.coupling.is_some_and(|c| reaches(&c.m)) || reaches(self.p) {
-            self.row_product(i, x)
-        } else {
-            Vec3::ZERO
-        }
     }
 
     /// The matrix `P + C` on one merged pattern (for the direct solver and inspection).
@@ -282,22 +263,17 @@ mod tests {
                 let off = c.matrix().row(i).0.len() > 1;
                 prop_assert_eq!(c.rows().contains(&(i as u32)), off);
             }
-            // with most of x zero (every particle but those `keep` names), the product that
-            // skips the rows reaching no non-zero is the whole product, to the bit
+            // with most of z zero (every particle but those `keep` names), the pass that skips
+            // the rows reaching no non-zero of z gives the whole products, to the bit
             let sparse: Vec<Vec3> = (0..n)
                 .map(|i| if keep.contains(&(i as u32 % 30)) { x[i] } else { Vec3::ZERO })
                 .collect();
-            let (mut got, mut full) = (vec![Vec3::splat(7.0); n], vec![Vec3::ZERO; n]);
-            a.mul_vec_sparse(&sparse, &mut got);
+            let mut full = vec![Vec3::ZERO; n];
             a.mul_vec(&sparse, &mut full);
-            for i in 0..n {
-                prop_assert_eq!(got[i].to_array().map(f64::to_bits), full[i].to_array().map(f64::to_bits), "row {}", i);
-            }
-            // both products in one pass: the bits of the two calls
             let (mut bz, mut bx) = (vec![Vec3::splat(7.0); n], vec![Vec3::splat(7.0); n]);
             a.mul_vec_both(&sparse, &x, &mut bz, &mut bx);
             for i in 0..n {
-                prop_assert_eq!(bz[i].to_array().map(f64::to_bits), got[i].to_array().map(f64::to_bits), "row {}", i);
+                prop_assert_eq!(bz[i].to_array().map(f64::to_bits), full[i].to_array().map(f64::to_bits), "row {}", i);
                 prop_assert_eq!(bx[i].to_array().map(f64::to_bits), y[i].to_array().map(f64::to_bits), "row {}", i);
             }
         }

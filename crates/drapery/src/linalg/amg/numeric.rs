@@ -106,21 +106,14 @@ fn filter_matrix(
             let mut at = 0;
             for i in rows {
                 let (cols, r) = a.row(i);
-                if let Some(c) = changed
-                    && !c[i]
-                    && !cols.iter().any(|&j| c[j as usize])
-                {
-                    // the row's blocks from its diagonal on are its upper-triangle entries
-                    at += r.end - a.diag_index(i);
-                    continue;
-                }
                 for (&j, k) in cols.iter().zip(r) {
                     let j = j as usize;
                     if let Some(c) = changed
                         && !c[i]
                         && !c[j]
                     {
-                        // a block between two unchanged filters keeps its value
+                        // a block between two unchanged filters keeps its value (the row's
+                        // blocks from its diagonal on are its upper-triangle entries)
                         at += (j >= i) as usize;
                         continue;
                     }
