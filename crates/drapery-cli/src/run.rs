@@ -134,6 +134,8 @@ fn clear_run(dir: &Path, stem: &str, cloths: &[ClothInfo]) -> Result<()> {
 }
 
 /// Where the run starts: fresh, or after the frame of a saved state.
+// (one value per run: boxing the saved state would save nothing)
+#[allow(clippy::large_enum_variant)]
 enum Start {
     Fresh,
     Resume(RunState),

@@ -14,7 +14,7 @@ fn written_frames_read_back_to_identical_f64_bits_across_several_cloths() {
         f64::MIN_POSITIVE,
         1.0 / 3.0,
         -2.0 / 3.0,
-        123456789.123456789,
+        123_456_789.123_456_79,
         9007199254740993.0,
         -1.7976931348623157e308,
         2.5e-8,

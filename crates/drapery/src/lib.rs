@@ -16,6 +16,9 @@
 //! SIMD is chosen at run time: the block kernels use AVX when the CPU running the program has
 //! it, whatever CPU the build targeted, with the same bits either way (`linalg::simd`).
 #![warn(missing_docs)]
+// Comparisons written `!(x > 0.0)` are true for NaN on purpose (a NaN is refused, not let
+// through), and the numeric kernels index their loops as the formulas subscript them.
+#![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
 // `unsafe` only in the AVX block kernels (`linalg::block::avx`, `linalg::sym::avx`), which allow it
 #![deny(unsafe_code)]
 

@@ -332,7 +332,7 @@ impl Mesh {
             )));
         }
         let len = normal.length();
-        if !(len > 0.0 && len.is_finite()) || !center.is_finite() {
+        if !(len > 0.0 && len.is_finite() && center.is_finite()) {
             return Err(Error::Invalid(
                 "grid normal must be a non-zero finite vector and center finite".into(),
             ));

@@ -113,6 +113,8 @@ impl Motion {
 
     /// Feeds the motion to a fingerprint (a fixed or constant motion as its two velocities,
     /// keyframes as their times, poses and interpolation).
+    // (not `std::hash::Hash`: a fingerprint of the exact bits, the same on every platform)
+    #[allow(clippy::should_implement_trait)]
     pub fn hash(&self, h: &mut Fnv) {
         let vec = |h: &mut Fnv, x: Vec3| {
             for k in 0..3 {

@@ -654,7 +654,7 @@ mod tests {
         ) {
             let (a, b) = (boxes_of(&segs, r), boxes_of(&others, r));
             let (ta, tb) = (Bvh::new(a.clone()), Bvh::new(b.clone()));
-            let odd = |i: u32, j: u32| (i + j) % 3 != 0;
+            let odd = |i: u32, j: u32| !(i + j).is_multiple_of(3);
             let mut want = Vec::new();
             for i in 0..a.len() {
                 for j in i + 1..a.len() {

@@ -93,13 +93,13 @@ impl Handle {
                     format!("must be a finite time, got {r}"),
                 ));
             }
-            if let Motion::Keyframed(track) = &d.motion {
-                if r < track.first_time() {
-                    return Err(Error::field(
-                        format!("{field}.release"),
-                        format!("{r} s is before the first key ({} s)", track.first_time()),
-                    ));
-                }
+            if let Motion::Keyframed(track) = &d.motion
+                && r < track.first_time()
+            {
+                return Err(Error::field(
+                    format!("{field}.release"),
+                    format!("{r} s is before the first key ({} s)", track.first_time()),
+                ));
             }
         }
         Ok(Handle {
@@ -198,7 +198,14 @@ mod tests {
         let mut all = vec![Vec3::ZERO; 13];
         all[12] = x[2];
         all[10] = x[0];
-        let (pinned, moving) = step_targets(&[false; 13], &[hd.clone()], &[], &all, 0.0, 0.25);
+        let (pinned, moving) = step_targets(
+            &[false; 13],
+            std::slice::from_ref(&hd),
+            &[],
+            &all,
+            0.0,
+            0.25,
+        );
         assert!(pinned[10] && pinned[12] && !pinned[11]);
         assert_eq!(moving.iter().map(|m| m.0).collect::<Vec<_>>(), vec![10, 12]);
         for (p, v) in moving {

@@ -254,6 +254,8 @@ fn topology_with_tobj(
     positions: Vec<Vec3>,
     origins: &Origins,
 ) -> std::result::Result<Mesh, String> {
+    // (`..Default::default()`: whatever options a later tobj adds keep their defaults)
+    #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
         triangulate: false,
         single_index: false,
@@ -561,7 +563,7 @@ mod tests {
                 Vec3::new(0.1 + 0.2, 1e-300, -0.0),
                 Vec3::new(1.0 / 3.0, 1.0, 5e-324),
                 Vec3::new(0.0, 1.0, 7.0),
-                Vec3::new(-f64::MAX, f64::MIN_POSITIVE, 123456789.123456789),
+                Vec3::new(-f64::MAX, f64::MIN_POSITIVE, 123_456_789.123_456_79),
                 Vec3::new(-2.5e17, 0.0, 0.0),
             ],
             faces: vec![Face::Tri([0, 1, 2])],

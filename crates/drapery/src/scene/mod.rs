@@ -292,7 +292,7 @@ fn whole(x: f64) -> Option<usize> {
         return None;
     }
     let n = x.round();
-    if n < 1.0 || n > MAX_COUNT || (x - n).abs() > WHOLE_TOLERANCE * n {
+    if !(1.0..=MAX_COUNT).contains(&n) || (x - n).abs() > WHOLE_TOLERANCE * n {
         return None;
     }
     Some(n as usize)

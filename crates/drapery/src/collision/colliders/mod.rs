@@ -316,6 +316,8 @@ impl Shape {
     }
 
     /// Feeds the shape to a fingerprint.
+    // (not `std::hash::Hash`: a fingerprint of the exact bits, the same on every platform)
+    #[allow(clippy::should_implement_trait)]
     pub fn hash(&self, h: &mut Fnv) {
         dispatch!(self, s => s.hash(h))
     }
