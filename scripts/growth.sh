@@ -15,7 +15,9 @@
 # combined moves the answer by a few per cent: BENCHMARKS.md, thirty-fifth session). DRAPERY
 # defaults to target/release/drapery; FRAMES in the environment runs fewer frames (4 steps
 # each), THREADS another number of solver threads than the cores (`drapery run --threads`: on
-# one core the growth is smaller, BENCHMARKS.md, thirty-sixth session). The machine should be
+# one core the growth is smaller, BENCHMARKS.md, thirty-sixth session), and SELF_COLLISION=off
+# runs both scenes with `self_collision = false` (obstacle contact and friction as before: where
+# the growth comes from, BENCHMARKS.md, thirty-eighth session). The machine should be
 # otherwise idle: a single pair can be off by 10 %, which is why the pairs are alternated and
 # their median is printed.
 set -euo pipefail
@@ -40,6 +42,17 @@ if ! "$drapery" bench --scenes spin-129,spin-290 --frames "$frames" --write-scen
   echo "growth.sh: $drapery bench --write-scenes failed: $(tail -n1 "$work/log")" >&2
   exit 1
 fi
+self_collision=${SELF_COLLISION:-on}
+case $self_collision in
+on) ;;
+off)
+  for n in 129 290; do
+    grep -q '^self_collision = true$' "$work/spin-$n.toml" || { echo "growth.sh: spin-$n.toml has no 'self_collision = true' line to turn off" >&2; exit 1; }
+    sed -i 's/^self_collision = true$/self_collision = false/' "$work/spin-$n.toml"
+  done
+  ;;
+*) echo "growth.sh: SELF_COLLISION must be on or off, not '$self_collision'" >&2; exit 2 ;;
+esac
 steps=$((4 * frames))
 have_time=false
 [ -x /usr/bin/time ] && have_time=true
@@ -70,7 +83,7 @@ run() {
 growth() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.3f", (b / (290 * 290)) / (a / (129 * 129)) }'; }
 median() { printf '%s\n' "$@" | sort -g | awk '{ v[NR] = $1 } END { if (NR % 2) print v[(NR + 1) / 2]; else print (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
 
-echo "spin-129 and spin-290, $frames frames ($steps steps) each, $pairs pairs, $threads threads"
+echo "spin-129 and spin-290, $frames frames ($steps steps) each, $pairs pairs, $threads threads, self-collision $self_collision"
 ratios=()
 times129=()
 times290=()
