@@ -200,6 +200,36 @@ def test_the_same_calls_give_the_same_bits():
     assert x1.tobytes() == x2.tobytes() and v1.tobytes() == v2.tobytes()
 
 
+def test_a_saved_state_keeps_the_poses_set_and_continues_to_the_same_bits():
+    def controlled():
+        sim = simulation()
+        for k in range(4):
+            sim.set_handle_pose(0, [0.01 * k, 0.02 * k, 0.0], about_y(0.05 * k))
+            sim.step()
+        # motions that end after the state is saved
+        sim.set_collider_pose("table", [0.05, 0.0, 0.0], about_y(-0.1), time=sim.time + 10 * H)
+        sim.set_handle_pose(("flag", 0), [0.0, 0.0, 0.03], time=sim.time + 10 * H)
+        for _ in range(3):
+            sim.step()
+        return sim
+
+    whole = controlled()
+    state = whole.save_state()
+    poses = [whole.collider_pose("table"), whole.handle_pose(0), whole.handle_pose(1)]
+    for _ in range(9):
+        whole.step()
+    resumed = drapery.Simulation.from_state(drapery.Scene.from_dict(control_scene()), state)
+    again = [resumed.collider_pose("table"), resumed.handle_pose(0), resumed.handle_pose(1)]
+    for (t, r), (u, w) in zip(poses, again):
+        assert t.tobytes() == u.tobytes() and r.tobytes() == w.tobytes()
+    for _ in range(9):
+        resumed.step()
+    assert resumed.positions().tobytes() == whole.positions().tobytes()
+    assert resumed.velocities().tobytes() == whole.velocities().tobytes()
+    # the scene's own motions would have left the table where it was
+    assert resumed.collider_pose("table")[0].tolist() == [0.05, 0.0, 0.0]
+
+
 @pytest.mark.parametrize(
     "call, error, message",
     [

@@ -21,7 +21,18 @@
 //! forces, and a u64 FNV-1a checksum ([`Fnv`]) of everything before it. A `DRAPERY-STATE-4`
 //! file (the same without the normal forces) is read as having none, a `DRAPERY-STATE-3` file
 //! (without the tangles either) as having no tangles left.
+//!
+//! When a front end has replaced a collider's or a handle's motion
+//! ([`Simulation::set_obstacle_motion`], [`Simulation::set_handle_motion`]: Python's
+//! `set_collider_pose`, a control loop), the snapshot holds every collider's and handle's motion
+//! too, and the run resumed from it goes on with them: the magic is then `DRAPERY-STATE-6\n`,
+//! and after the normal forces come u64 collider count + their motions, u64 handle count + theirs
+//! ([`motions`]). Otherwise the layout is `DRAPERY-STATE-5`'s, byte for byte, and restoring it
+//! gives every collider and handle the scene's motion.
 
+mod motions;
+
+use crate::animation::Motion;
 use crate::error::{Error, Result};
 use crate::fingerprint::Fnv;
 use crate::math::Vec3;
@@ -29,6 +40,8 @@ use crate::step::Simulation;
 
 /// The magic of the current layout.
 const MAGIC: &[u8] = b"DRAPERY-STATE-5\n";
+/// The layout with the motions a front end set.
+const MAGIC_MOTIONS: &[u8] = b"DRAPERY-STATE-6\n";
 /// The layout before the normal forces.
 const MAGIC_4: &[u8] = b"DRAPERY-STATE-4\n";
 /// The layout before the tangles.
@@ -49,6 +62,8 @@ pub struct Snapshot {
     tangles: (bool, Vec<[u32; 2]>, Vec<[u32; 2]>),
     /// Each particle's obstacle normal force in the last step, N.
     normal_force: Vec<f64>,
+    /// Every collider's and every handle's motion, when a front end replaced one.
+    motions: Option<(Vec<Motion>, Vec<Motion>)>,
 }
 
 impl Simulation {
@@ -68,6 +83,17 @@ impl Simulation {
                 self.tangles.crossings.clone(),
             ),
             normal_force: self.normal_force.clone(),
+            motions: self.motions_set.then(|| {
+                let colliders = self.model.obstacles.iter();
+                (
+                    colliders.map(|o| o.collider.motion.clone()).collect(),
+                    self.model
+                        .handles
+                        .iter()
+                        .map(|h| h.motion.clone())
+                        .collect(),
+                )
+            }),
         }
     }
 
@@ -95,6 +121,27 @@ impl Simulation {
                 "the snapshot's tangles name particles, colliders or triangles this scene does not have: not a state of this scene".into(),
             ));
         }
+        let handles = self.model.handles.len();
+        if let Some((c, h)) = &s.motions
+            && (c.len() != obstacles || h.len() != handles)
+        {
+            return Err(Error::Invalid(format!(
+                "the snapshot holds the motions of {} colliders and {} handles but the scene has {obstacles} and {handles}: not a state of this scene",
+                c.len(),
+                h.len()
+            )));
+        }
+        let (colliders, held) = match &s.motions {
+            Some((c, h)) => (c, h),
+            None => (&self.scene_motions.0, &self.scene_motions.1),
+        };
+        for (o, m) in self.model.obstacles.iter_mut().zip(colliders) {
+            o.collider.motion = m.clone();
+        }
+        for (hd, m) in self.model.handles.iter_mut().zip(held) {
+            hd.motion = m.clone();
+        }
+        self.motions_set = s.motions.is_some();
         self.tangles = crate::step::tangles::Tangles::restored(
             *found,
             inside.clone(),
@@ -157,10 +204,18 @@ impl Snapshot {
         &self.v
     }
 
+    /// Whether it holds motions a front end set (see the [module documentation](self)).
+    pub fn has_motions(&self) -> bool {
+        self.motions.is_some()
+    }
+
     /// The bytes described in the [module documentation](self).
     pub fn to_bytes(&self) -> Vec<u8> {
         let mut out = Vec::with_capacity(64 + self.header.len() + 72 * self.x.len());
-        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(match self.motions {
+            Some(_) => MAGIC_MOTIONS,
+            None => MAGIC,
+        });
         out.extend_from_slice(&(self.header.len() as u64).to_le_bytes());
         out.extend_from_slice(&self.header);
         for v in [self.steps, self.time.to_bits(), self.x.len() as u64] {
@@ -186,6 +241,12 @@ impl Snapshot {
         for f in &self.normal_force {
             out.extend_from_slice(&f.to_le_bytes());
         }
+        if let Some((colliders, handles)) = &self.motions {
+            for list in [colliders, handles] {
+                out.extend_from_slice(&(list.len() as u64).to_le_bytes());
+                list.iter().for_each(|m| motions::encode(m, &mut out));
+            }
+        }
         let sum = Fnv::new().bytes(&out).finish();
         out.extend_from_slice(&sum.to_le_bytes());
         out
@@ -196,7 +257,8 @@ impl Snapshot {
     pub fn from_bytes(b: &[u8]) -> Result<Snapshot> {
         let v3 = b.starts_with(MAGIC_3);
         let v4 = b.starts_with(MAGIC_4);
-        if !b.starts_with(MAGIC) && !v3 && !v4 {
+        let v6 = b.starts_with(MAGIC_MOTIONS);
+        if !b.starts_with(MAGIC) && !v3 && !v4 && !v6 {
             let head = &b[..b.len().min(32)];
             return Err(match head.iter().position(|&c| c == b'\n') {
                 Some(end) if head.starts_with(MAGIC_FAMILY) => Error::Invalid(format!(
@@ -264,7 +326,26 @@ impl Snapshot {
                 .map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
                 .collect()
         };
-        if r.at != body.len() || (!v3 && !v4 && normal_force.len() != n) {
+        if !v3 && !v4 && normal_force.len() != n {
+            return Err(misfit());
+        }
+        let motions = if v6 {
+            let mut list = |what: &str| -> Result<Vec<Motion>> {
+                let len = r.u64().ok_or_else(misfit)?;
+                // (each motion takes 8 bytes at least)
+                if len.checked_mul(8).is_none_or(|b| b > r.left() as u64) {
+                    return Err(misfit());
+                }
+                (0..len as usize)
+                    .map(|k| motions::decode(&mut r, &format!("{what}[{k}]")))
+                    .collect()
+            };
+            let colliders = list("collider")?;
+            Some((colliders, list("handle")?))
+        } else {
+            None
+        };
+        if r.at != body.len() {
             return Err(misfit());
         }
         Ok(Snapshot {
@@ -276,6 +357,7 @@ impl Snapshot {
             warm_start,
             tangles,
             normal_force,
+            motions,
         })
     }
 }
@@ -294,6 +376,10 @@ impl<'a> Reader<'a> {
     }
     fn u64(&mut self) -> Option<u64> {
         self.take(8)?.try_into().ok().map(u64::from_le_bytes)
+    }
+    /// Bytes not read yet.
+    fn left(&self) -> usize {
+        self.b.len() - self.at
     }
 }
 
@@ -393,6 +479,7 @@ mod tests {
             ],
             tangles: (true, vec![[1, 0]], vec![[0, 3], [2, u32::MAX]]),
             normal_force: vec![0.125, -0.0],
+            motions: None,
         }
     }
 
@@ -425,12 +512,139 @@ mod tests {
         assert_eq!(Snapshot::from_bytes(&old).unwrap(), s);
     }
 
+    /// Steps `n`, lets `set` replace motions (a front end's control), snapshots, goes through
+    /// bytes, restores into a fresh simulation and steps `m` more: the bits of the uninterrupted
+    /// run with the same control. The same snapshot without its motions goes on with the
+    /// scene's, also in a simulation whose motions had been replaced, and differs.
+    fn resumes_with_the_motions_set(
+        preset: Preset,
+        size: usize,
+        (n, m): (usize, usize),
+        set: impl Fn(&mut Simulation),
+    ) {
+        let fresh = || preset.simulation(size, 1e-3).unwrap();
+        let mut whole = fresh();
+        run(&mut whole, n);
+        set(&mut whole);
+        run(&mut whole, m);
+
+        let mut first = fresh();
+        run(&mut first, n);
+        assert!(!first.snapshot().has_motions(), "no motion set yet");
+        set(&mut first);
+        let bytes = first.snapshot().to_bytes();
+        assert!(bytes.starts_with(MAGIC_MOTIONS));
+        let state = Snapshot::from_bytes(&bytes).unwrap();
+        assert!(state.has_motions());
+        let mut second = fresh();
+        second.restore_snapshot(&state).unwrap();
+        run(&mut second, m);
+        assert_same_bits(&second.snapshot(), &whole.snapshot());
+        assert!(second.snapshot().has_motions(), "kept by the next snapshot");
+
+        let scene_motions = Snapshot {
+            motions: None,
+            ..state
+        };
+        let mut own = fresh();
+        own.restore_snapshot(&scene_motions).unwrap();
+        run(&mut own, m);
+        let mut controlled = fresh();
+        set(&mut controlled);
+        controlled.restore_snapshot(&scene_motions).unwrap();
+        run(&mut controlled, m);
+        assert_same_bits(&controlled.snapshot(), &own.snapshot());
+        assert!(!controlled.snapshot().has_motions());
+        assert_ne!(own.model.x, whole.model.x, "the motions set change the run");
+    }
+
+    #[test]
+    fn a_run_resumed_after_a_collider_was_moved_goes_on_with_its_new_motion() {
+        // the drape's sphere, in contact from about step 9, starts sliding sideways at step 12
+        resumes_with_the_motions_set(Preset::Drape, 8, (12, 6), |sim| {
+            let m = Motion::constant(Vec3::new(0.5, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0));
+            sim.set_obstacle_motion(0, m).unwrap();
+        });
+    }
+
+    #[test]
+    fn a_run_resumed_after_a_handle_was_moved_goes_on_with_its_new_motion() {
+        // the twist's first handle is keyed to rise instead (two keys, linear), the second
+        // held where it is
+        resumes_with_the_motions_set(Preset::Twist, 8, (5, 6), |sim| {
+            use crate::animation::{Interpolation, Keyframe, Track};
+            let now = sim.time();
+            let (q, t) = sim.model().handles()[0].motion.pose(now);
+            let keys = vec![
+                Keyframe {
+                    time: now,
+                    translation: t,
+                    rotation: q,
+                },
+                Keyframe {
+                    time: now + 0.1,
+                    translation: t + Vec3::new(0.0, 0.05, 0.0),
+                    rotation: q,
+                },
+            ];
+            let track = Track::new(keys, Interpolation::Linear, "").unwrap();
+            sim.set_handle_motion(0, Motion::Keyframed(track)).unwrap();
+            sim.set_handle_motion(1, Motion::Fixed).unwrap();
+        });
+    }
+
+    #[test]
+    fn motions_for_another_scene_are_refused_and_change_nothing() {
+        let mut drape = Preset::Drape.simulation(8, 1e-3).unwrap();
+        drape
+            .set_obstacle_motion(0, Motion::constant(Vec3::X, Vec3::ZERO))
+            .unwrap();
+        // the hanging cloth has as many particles but no collider
+        let mut hang = Preset::Hang.simulation(8, 1e-3).unwrap();
+        run(&mut hang, 2);
+        let before = hang.snapshot();
+        let e = hang.restore_snapshot(&drape.snapshot()).unwrap_err();
+        assert!(e.to_string().contains("motions of 1 colliders"), "{e}");
+        assert_same_bits(&hang.snapshot(), &before);
+    }
+
     #[test]
     fn bytes_round_trip_every_bit() {
         let s = sample();
-        let r = Snapshot::from_bytes(&s.to_bytes()).unwrap();
+        let b = s.to_bytes();
+        assert!(
+            b.starts_with(MAGIC),
+            "without motions, the layout before them"
+        );
+        let r = Snapshot::from_bytes(&b).unwrap();
         assert_eq!(r, s);
         assert_eq!(r.header(), b"frame 7");
+        let keys = vec![
+            crate::animation::Keyframe::at(0.0),
+            crate::animation::Keyframe {
+                time: 0.5,
+                translation: Vec3::new(0.1, 0.2, -0.3),
+                rotation: glam::DQuat::from_rotation_z(0.3),
+            },
+        ];
+        let track = crate::animation::Track::new(keys, Default::default(), "").unwrap();
+        let with = Snapshot {
+            motions: Some((
+                vec![Motion::Fixed, Motion::Keyframed(track)],
+                vec![Motion::constant(Vec3::Y, Vec3::ZERO)],
+            )),
+            ..s.clone()
+        };
+        let b = with.to_bytes();
+        assert!(b.starts_with(MAGIC_MOTIONS));
+        assert_eq!(Snapshot::from_bytes(&b).unwrap(), with);
+        // cut anywhere in the motions: refused
+        for cut in [b.len() - 9, b.len() - 40, b.len() - 100] {
+            let mut c = b[..cut].to_vec();
+            let sum = Fnv::new().bytes(&c).finish();
+            c.extend_from_slice(&sum.to_le_bytes());
+            assert!(Snapshot::from_bytes(&c).is_err(), "cut at {cut}");
+        }
         assert_eq!(r.x[0].y.to_bits(), (-0.0f64).to_bits());
         assert_same_bits(&r, &s);
     }

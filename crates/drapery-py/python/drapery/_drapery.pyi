@@ -147,7 +147,7 @@ class Simulation:
         """Moves a collider linearly from its pose at ``sim.time`` to ``translation``,
         ``rotation`` (quaternion [x, y, z, w]: x = c + T + R (x0 - c), c its center), reached at
         ``time`` (default: the end of the next step) and held; IndexError, ValueError or
-        TypeError naming the argument."""
+        TypeError naming the argument. ``save_state()`` keeps the motions set this way."""
     def set_handle_pose(
         self,
         handle: _Handle,
@@ -164,7 +164,8 @@ class Simulation:
     def handle_vertices(self, handle: _Handle) -> npt.NDArray[np.int64]:
         """The handle's vertices: rows of ``positions(cloth)``, cloth ``handles[i][0]``."""
     def save_state(self) -> bytes:
-        """The whole state, exact to the bit, with the scene's fingerprint."""
+        """The whole state, exact to the bit, with the scene's fingerprint (and the collider
+        and handle motions set from Python, if any)."""
 
 def run(
     scene: Union[Scene, _StrPath],

@@ -373,7 +373,7 @@ impl PySimulation {
     /// replaces its motion from the scene (or an earlier call). Raises IndexError (index out
     /// of range), ValueError (unknown name, a non-finite number, a zero quaternion, `time`
     /// not after sim.time) or TypeError, naming the argument and changing nothing. The motion
-    /// set is not part of save_state().
+    /// set is part of save_state(): a simulation continued from it goes on with it.
     #[pyo3(
         signature = (collider, translation, rotation = None, time = None),
         text_signature = "(self, collider, translation, rotation=(0.0, 0.0, 0.0, 1.0), time=None)"

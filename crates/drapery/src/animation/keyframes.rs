@@ -269,6 +269,24 @@ impl Track {
         })
     }
 
+    /// A track of keys that are already a track's ([`Track::keys`]), rotations as they are:
+    /// [`Track::new`] would normalize them again, which may change their last bits (a
+    /// snapshot restores a track with it, [`crate::snapshot`]). The same errors as
+    /// [`Track::new`].
+    pub(crate) fn from_normalized(
+        keys: Vec<Keyframe>,
+        interpolation: Interpolation,
+        field: &str,
+    ) -> Result<Track> {
+        Track::new(keys.clone(), interpolation, field)?;
+        let segments = segments(&keys, interpolation);
+        Ok(Track {
+            keys,
+            interpolation,
+            segments,
+        })
+    }
+
     /// The keys, normalized: unit rotations, each on the hemisphere of the one before it.
     pub fn keys(&self) -> &[Keyframe] {
         &self.keys

@@ -44,6 +44,7 @@ pub use settings::{FIRST_CONTACT_TOLERANCE, IMPACT_SHARE, LinearSolver, SolverSe
 pub use start_check::StartCheck;
 pub use tangles::Tangled;
 
+use crate::animation::Motion;
 use crate::collision::broad_phase::Candidates;
 use crate::collision::bvh::TreeCache;
 use crate::collision::seams::Seams;
@@ -103,6 +104,12 @@ pub struct Simulation {
     /// (used by the next detect stage only if the positions are still the same, bit for bit).
     next_pairs: Option<(Vec<Vec3>, Candidates)>,
     solvers: Solvers,
+    /// The colliders' and handles' motions as the scene gave them (a snapshot without motions
+    /// restores these).
+    pub(crate) scene_motions: (Vec<Motion>, Vec<Motion>),
+    /// Whether a front end has replaced a motion ([`Simulation::set_obstacle_motion`],
+    /// [`Simulation::set_handle_motion`]): a snapshot then holds them all (part of the state).
+    pub(crate) motions_set: bool,
 }
 
 /// The tree orders of the detect and fail-safe stages' broad phases.
@@ -140,6 +147,12 @@ impl Simulation {
         let stitched: Vec<[u32; 2]> = model.stitches.iter().map(|p| [p.a, p.b]).collect();
         let seams = Seams::new(n, &triangles, &stitched);
         let strain_limits = StrainLimits::of(&model);
+        let scene_motions = (
+            (model.obstacles.iter())
+                .map(|o| o.collider.motion.clone())
+                .collect(),
+            model.handles.iter().map(|h| h.motion.clone()).collect(),
+        );
         Ok(Simulation {
             warm_start: vec![Vec3::ZERO; n],
             normal_force: vec![0.0; n],
@@ -159,6 +172,8 @@ impl Simulation {
             next_pairs: None,
             work: Work::default(),
             solvers: Solvers::default(),
+            scene_motions,
+            motions_set: false,
         })
     }
 
@@ -470,7 +485,8 @@ impl Simulation {
 
     /// Replaces the motion of obstacle `index` from now on (obstacles are posed at every
     /// step from their motion, so this takes effect at the next step). An error when there is
-    /// no such obstacle or the motion is not finite.
+    /// no such obstacle or the motion is not finite. From then on a [`Simulation::snapshot`]
+    /// holds every collider's and handle's motion, so a resumed run goes on with them.
     pub fn set_obstacle_motion(
         &mut self,
         index: usize,
@@ -478,6 +494,7 @@ impl Simulation {
     ) -> Result<()> {
         let o = checked(&mut self.model.obstacles, index, "collider", &motion)?;
         o.collider.motion = motion;
+        self.motions_set = true;
         Ok(())
     }
 
@@ -503,7 +520,8 @@ impl Simulation {
     /// Replaces the motion of handle `index` (in the order of [`Model::handles`]: the cloths'
     /// handles in scene order) from now on; it takes effect at the next step, whose end
     /// positions the new motion gives. An error when there is no such handle or the motion is
-    /// not finite.
+    /// not finite. A snapshot then holds the motions, as after
+    /// [`Simulation::set_obstacle_motion`].
     pub fn set_handle_motion(
         &mut self,
         index: usize,
@@ -511,6 +529,7 @@ impl Simulation {
     ) -> Result<()> {
         let h = checked(&mut self.model.handles, index, "handle", &motion)?;
         h.motion = motion;
+        self.motions_set = true;
         Ok(())
     }
 
