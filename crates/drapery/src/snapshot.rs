@@ -100,7 +100,8 @@ impl Simulation {
     /// Puts a snapshot's state back (positions, velocities, warm start, time, step count, and
     /// the colliders' and handles' motions: those it holds, else the scene's). The simulation
     /// must be built from the same scene as the one the snapshot was taken from; an error,
-    /// changing nothing, when the particle, collider or handle counts differ.
+    /// changing nothing, when the particle counts differ or the motions it holds are not as
+    /// many as the scene's colliders and handles.
     pub fn restore_snapshot(&mut self, s: &Snapshot) -> Result<()> {
         let n = self.model.particle_count();
         if s.particle_count() != n {
