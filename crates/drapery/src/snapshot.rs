@@ -621,22 +621,7 @@ mod tests {
         let r = Snapshot::from_bytes(&b).unwrap();
         assert_eq!(r, s);
         assert_eq!(r.header(), b"frame 7");
-        let keys = vec![
-            crate::animation::Keyframe::at(0.0),
-            crate::animation::Keyframe {
-                time: 0.5,
-                translation: Vec3::new(0.1, 0.2, -0.3),
-                rotation: glam::DQuat::from_rotation_z(0.3),
-            },
-        ];
-        let track = crate::animation::Track::new(keys, Default::default(), "").unwrap();
-        let with = Snapshot {
-            motions: Some((
-                vec![Motion::Fixed, Motion::Keyframed(track)],
-                vec![Motion::constant(Vec3::Y, Vec3::ZERO)],
-            )),
-            ..s.clone()
-        };
+        let with = with_motions();
         let b = with.to_bytes();
         assert!(b.starts_with(MAGIC_MOTIONS));
         assert_eq!(Snapshot::from_bytes(&b).unwrap(), with);
@@ -649,6 +634,40 @@ mod tests {
         }
         assert_eq!(r.x[0].y.to_bits(), (-0.0f64).to_bits());
         assert_same_bits(&r, &s);
+    }
+
+    fn with_motions() -> Snapshot {
+        let keys = vec![
+            crate::animation::Keyframe::at(0.0),
+            crate::animation::Keyframe {
+                time: 0.5,
+                translation: Vec3::new(0.1, 0.2, -0.3),
+                rotation: glam::DQuat::from_rotation_z(0.3),
+            },
+        ];
+        let track = crate::animation::Track::new(keys, Default::default(), "").unwrap();
+        Snapshot {
+            motions: Some((
+                vec![Motion::Fixed, Motion::Keyframed(track)],
+                vec![Motion::constant(Vec3::Y, Vec3::ZERO)],
+            )),
+            ..sample()
+        }
+    }
+
+    proptest::proptest! {
+        /// Any byte of a state with motions changed (and the checksum made to match): read
+        /// back as some state or refused with an error, never a panic.
+        #[test]
+        fn a_changed_byte_with_a_matching_checksum_never_panics(at in 0usize..10_000, to in 0u8..=255) {
+            let b = with_motions().to_bytes();
+            let mut c = b[..b.len() - 8].to_vec();
+            let i = at % c.len();
+            c[i] = to;
+            let sum = Fnv::new().bytes(&c).finish();
+            c.extend_from_slice(&sum.to_le_bytes());
+            let _ = Snapshot::from_bytes(&c);
+        }
     }
 
     #[test]

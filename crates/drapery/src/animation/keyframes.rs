@@ -271,14 +271,28 @@ impl Track {
 
     /// A track of keys that are already a track's ([`Track::keys`]), rotations as they are:
     /// [`Track::new`] would normalize them again, which may change their last bits (a
-    /// snapshot restores a track with it, [`crate::snapshot`]). The same errors as
-    /// [`Track::new`].
+    /// snapshot restores a track with it, [`crate::snapshot`]). The errors of [`Track::new`],
+    /// and one for a rotation that is not already unit and on its predecessor's hemisphere
+    /// (within `1e-12`).
     pub(crate) fn from_normalized(
         keys: Vec<Keyframe>,
         interpolation: Interpolation,
         field: &str,
     ) -> Result<Track> {
-        Track::new(keys.clone(), interpolation, field)?;
+        let normalized = Track::new(keys.clone(), interpolation, field)?;
+        for (i, (k, n)) in keys.iter().zip(normalized.keys()).enumerate() {
+            if !((k.rotation - n.rotation).length() <= 1e-12) {
+                let base = if field.is_empty() {
+                    "keyframes".to_string()
+                } else {
+                    format!("{field}.keyframes")
+                };
+                return Err(Error::field(
+                    format!("{base}[{i}].rotation"),
+                    "must be a track's normalized rotation",
+                ));
+            }
+        }
         let segments = segments(&keys, interpolation);
         Ok(Track {
             keys,

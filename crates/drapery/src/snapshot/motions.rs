@@ -208,6 +208,21 @@ mod tests {
         // keys out of order (the second key's time set to -1)
         let e = bad(&|c| c[24 + 64..24 + 72].copy_from_slice(&(-1.0f64).to_le_bytes()));
         assert!(e.contains("handle[0].keyframes[1].time"), "{e}");
+        // a rotation that is not unit (its x doubled)
+        let mut c = Vec::new();
+        let turn = Keyframe {
+            time: 1.0,
+            translation: Vec3::ZERO,
+            rotation: DQuat::from_rotation_x(0.5),
+        };
+        let track = Track::new(vec![Keyframe::at(0.0), turn], Interpolation::Linear, "").unwrap();
+        encode(&Motion::Keyframed(track), &mut c);
+        let x = 24 + 64 + 32;
+        let doubled = 2.0 * f64::from_le_bytes(c[x..x + 8].try_into().unwrap());
+        c[x..x + 8].copy_from_slice(&doubled.to_le_bytes());
+        let mut r = Reader { b: &c, at: 0 };
+        let e = decode(&mut r, "handle[1]").unwrap_err().to_string();
+        assert!(e.contains("handle[1].keyframes[1].rotation"), "{e}");
         // a constant motion that is not finite
         let mut c = Vec::new();
         encode(&Motion::constant(Vec3::X, Vec3::ZERO), &mut c);
