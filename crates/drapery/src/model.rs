@@ -836,6 +836,17 @@ impl Model {
         &self.handles
     }
 
+    /// Every collider's motion and every handle's, in their orders (what a snapshot holds of
+    /// them, [`crate::snapshot`]).
+    pub(crate) fn motions(&self) -> (Vec<crate::animation::Motion>, Vec<crate::animation::Motion>) {
+        (
+            (self.obstacles.iter())
+                .map(|o| o.collider.motion.clone())
+                .collect(),
+            self.handles.iter().map(|h| h.motion.clone()).collect(),
+        )
+    }
+
     /// Which particles are pinned.
     pub fn pins(&self) -> &[bool] {
         &self.pinned

@@ -83,17 +83,7 @@ impl Simulation {
                 self.tangles.crossings.clone(),
             ),
             normal_force: self.normal_force.clone(),
-            motions: self.motions_set.then(|| {
-                let colliders = self.model.obstacles.iter();
-                (
-                    colliders.map(|o| o.collider.motion.clone()).collect(),
-                    self.model
-                        .handles
-                        .iter()
-                        .map(|h| h.motion.clone())
-                        .collect(),
-                )
-            }),
+            motions: self.motions_set.then(|| self.model.motions()),
         }
     }
 

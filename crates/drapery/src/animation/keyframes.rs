@@ -210,6 +210,15 @@ enum Place<'a> {
     On(&'a Segment, f64),
 }
 
+/// The path of a track's keys in errors: `FIELD.keyframes`, or `keyframes` without a field.
+fn keys_field(field: &str) -> String {
+    if field.is_empty() {
+        "keyframes".to_string()
+    } else {
+        format!("{field}.keyframes")
+    }
+}
+
 /// A validated keyframe track. See the module docs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Track {
@@ -226,11 +235,7 @@ impl Track {
     /// nonzero; there must be at least one key. Rotations are normalized, and each is flipped
     /// (`q → -q`, the same rotation) onto the hemisphere of the one before it.
     pub fn new(keys: Vec<Keyframe>, interpolation: Interpolation, field: &str) -> Result<Track> {
-        let base = if field.is_empty() {
-            "keyframes".to_string()
-        } else {
-            format!("{field}.keyframes")
-        };
+        let base = keys_field(field);
         if keys.is_empty() {
             return Err(Error::field(base, "must have at least one key, got none"));
         }
@@ -282,13 +287,8 @@ impl Track {
         let normalized = Track::new(keys.clone(), interpolation, field)?;
         for (i, (k, n)) in keys.iter().zip(normalized.keys()).enumerate() {
             if !((k.rotation - n.rotation).length() <= 1e-12) {
-                let base = if field.is_empty() {
-                    "keyframes".to_string()
-                } else {
-                    format!("{field}.keyframes")
-                };
                 return Err(Error::field(
-                    format!("{base}[{i}].rotation"),
+                    format!("{}[{i}].rotation", keys_field(field)),
                     "must be a track's normalized rotation",
                 ));
             }

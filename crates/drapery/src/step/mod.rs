@@ -147,12 +147,7 @@ impl Simulation {
         let stitched: Vec<[u32; 2]> = model.stitches.iter().map(|p| [p.a, p.b]).collect();
         let seams = Seams::new(n, &triangles, &stitched);
         let strain_limits = StrainLimits::of(&model);
-        let scene_motions = (
-            (model.obstacles.iter())
-                .map(|o| o.collider.motion.clone())
-                .collect(),
-            model.handles.iter().map(|h| h.motion.clone()).collect(),
-        );
+        let scene_motions = model.motions();
         Ok(Simulation {
             warm_start: vec![Vec3::ZERO; n],
             normal_force: vec![0.0; n],
