@@ -18,12 +18,18 @@
 //! has evicted the small one's data from the caches: with `BLOCK=1` spin-129's steps took about
 //! 4.5 % longer than with `BLOCK=10` (62.3–63.3 against 59.4–60.4 ms), which made the growth look
 //! that much smaller. Blocks of 10 frames leave a tenth of that.
+//!
+//! `SELF_COLLISION=off` builds both from the scene text with `self_collision = false` (obstacle
+//! contact and friction as before), as `scripts/growth.sh` does (BENCHMARKS.md, "Thirty-eighth
+//! session").
 
 /// The command's allocator (crates/drapery-cli/src/main.rs), so that the times match it.
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
-use drapery::presets::Preset;
+use drapery::Simulation;
+use drapery::presets::{Preset, spin_scene};
+use drapery::scene::Scene;
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -47,12 +53,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if block == 0 {
         return Err("BLOCK must be a positive whole number".into());
     }
+    let self_collision = match std::env::var("SELF_COLLISION").as_deref() {
+        Err(_) | Ok("on") => true,
+        Ok("off") => false,
+        Ok(other) => return Err(format!("SELF_COLLISION must be on or off, not '{other}'").into()),
+    };
     let preset = Preset::Spin;
     let (h, per_frame) = preset.step();
-    let mut sims = [
-        preset.simulation(small, 1e-3)?,
-        preset.simulation(large, 1e-3)?,
-    ];
+    let build = |n: usize| -> Result<Simulation, Box<dyn std::error::Error>> {
+        if self_collision {
+            return Ok(preset.simulation(n, 1e-3)?);
+        }
+        let text = spin_scene(n, frames, 1e-3);
+        let off = text.replace("self_collision = true", "self_collision = false");
+        if off == text {
+            return Err("the spin scene has no 'self_collision = true' to turn off".into());
+        }
+        Ok(Scene::from_str(&off, std::path::Path::new("spin.toml"))?.build()?)
+    };
+    let mut sims = [build(small)?, build(large)?];
     let sizes = [small, large].map(|n| (n * n) as f64);
     let mut seconds = [0.0f64; 2];
     let growth = |s: &[f64; 2]| (s[1] / sizes[1]) / (s[0] / sizes[0]);
