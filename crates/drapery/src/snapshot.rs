@@ -22,8 +22,8 @@
 //! file (the same without the normal forces) is read as having none, a `DRAPERY-STATE-3` file
 //! (without the tangles either) as having no tangles left.
 //!
-//! When a front end has replaced a collider's or a handle's motion
-//! ([`Simulation::set_obstacle_motion`], [`Simulation::set_handle_motion`]: Python's
+//! When a collider's or a handle's motion is not the scene's (a front end replaced it,
+//! [`Simulation::set_obstacle_motion`], [`Simulation::set_handle_motion`]: Python's
 //! `set_collider_pose`, a control loop), the snapshot holds every collider's and handle's motion
 //! too, and the run resumed from it goes on with them: the magic is then `DRAPERY-STATE-6\n`,
 //! and after the normal forces come u64 collider count + their motions, u64 handle count + theirs
@@ -62,7 +62,7 @@ pub struct Snapshot {
     tangles: (bool, Vec<[u32; 2]>, Vec<[u32; 2]>),
     /// Each particle's obstacle normal force in the last step, N.
     normal_force: Vec<f64>,
-    /// Every collider's and every handle's motion, when a front end replaced one.
+    /// Every collider's and every handle's motion, when one is not the scene's.
     motions: Option<(Vec<Motion>, Vec<Motion>)>,
 }
 
@@ -83,7 +83,7 @@ impl Simulation {
                 self.tangles.crossings.clone(),
             ),
             normal_force: self.normal_force.clone(),
-            motions: self.motions_set.then(|| self.model.motions()),
+            motions: Some(self.model.motions()).filter(|m| *m != self.scene_motions),
         }
     }
 
@@ -133,7 +133,6 @@ impl Simulation {
         for (hd, m) in self.model.handles.iter_mut().zip(held) {
             hd.motion = m.clone();
         }
-        self.motions_set = s.motions.is_some();
         self.tangles = crate::step::tangles::Tangles::restored(
             *found,
             inside.clone(),
@@ -196,7 +195,7 @@ impl Snapshot {
         &self.v
     }
 
-    /// Whether it holds motions a front end set (see the [module documentation](self)).
+    /// Whether it holds motions other than the scene's (see the [module documentation](self)).
     pub fn has_motions(&self) -> bool {
         self.motions.is_some()
     }

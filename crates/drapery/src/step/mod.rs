@@ -104,12 +104,10 @@ pub struct Simulation {
     /// (used by the next detect stage only if the positions are still the same, bit for bit).
     next_pairs: Option<(Vec<Vec3>, Candidates)>,
     solvers: Solvers,
-    /// The colliders' and handles' motions as the scene gave them (a snapshot without motions
-    /// restores these).
+    /// The colliders' and handles' motions as the scene gave them: while the model's differ
+    /// (a front end replaced one, [`Simulation::set_obstacle_motion`]), a snapshot holds them
+    /// all; a snapshot without motions restores these.
     pub(crate) scene_motions: (Vec<Motion>, Vec<Motion>),
-    /// Whether a front end has replaced a motion ([`Simulation::set_obstacle_motion`],
-    /// [`Simulation::set_handle_motion`]): a snapshot then holds them all (part of the state).
-    pub(crate) motions_set: bool,
 }
 
 /// The tree orders of the detect and fail-safe stages' broad phases.
@@ -168,7 +166,6 @@ impl Simulation {
             work: Work::default(),
             solvers: Solvers::default(),
             scene_motions,
-            motions_set: false,
         })
     }
 
@@ -480,8 +477,9 @@ impl Simulation {
 
     /// Replaces the motion of obstacle `index` from now on (obstacles are posed at every
     /// step from their motion, so this takes effect at the next step). An error when there is
-    /// no such obstacle or the motion is not finite. From then on a [`Simulation::snapshot`]
-    /// holds every collider's and handle's motion, so a resumed run goes on with them.
+    /// no such obstacle or the motion is not finite. While a motion differs from the scene's,
+    /// a [`Simulation::snapshot`] holds every collider's and handle's motion, so a resumed run
+    /// goes on with them.
     pub fn set_obstacle_motion(
         &mut self,
         index: usize,
@@ -489,7 +487,6 @@ impl Simulation {
     ) -> Result<()> {
         let o = checked(&mut self.model.obstacles, index, "collider", &motion)?;
         o.collider.motion = motion;
-        self.motions_set = true;
         Ok(())
     }
 
@@ -524,7 +521,6 @@ impl Simulation {
     ) -> Result<()> {
         let h = checked(&mut self.model.handles, index, "handle", &motion)?;
         h.motion = motion;
-        self.motions_set = true;
         Ok(())
     }
 
