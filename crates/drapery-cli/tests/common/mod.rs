@@ -91,8 +91,13 @@ pub fn frame(dir: &Path, k: usize) -> Vec<Vec3> {
 /// `drapery check --scene` (exit 0, no intersection) and returns the folder, the scene and the
 /// frames' positions.
 pub fn run_and_check(name: &str) -> (tempfile::TempDir, Scene, Vec<Vec<Vec3>>) {
-    let scene_path = examples().join(format!("{name}.toml"));
-    let scene = Scene::load(&scene_path).expect("example loads");
+    run_and_check_scene(&examples().join(format!("{name}.toml")))
+}
+
+/// [`run_and_check`] for the scene file at `scene_path`.
+pub fn run_and_check_scene(scene_path: &Path) -> (tempfile::TempDir, Scene, Vec<Vec<Vec3>>) {
+    let name = scene_path.display();
+    let scene = Scene::load(scene_path).expect("scene loads");
     let tmp = tempfile::tempdir().expect("temp dir");
     let out = tmp.path().join("out");
     let r = drapery(&[

@@ -7,7 +7,8 @@
 //!   of the step;
 //! * vertex–triangle and edge–edge continuous collision detection runs over the cloth (self and
 //!   cloth–cloth) and against mesh obstacles; the vertices of colliding cloth pairs first move as
-//!   impact zones that translate by their mean displacement (`zones`); when that cannot
+//!   impact zones that translate by their mean displacement (`zones`; in a step that would
+//!   otherwise fail, a second try with partial zones, which move the vertices they can); when that cannot
 //!   be done, the cloth vertices of a colliding pair are pulled back along their own paths to
 //!   half the time of impact, repeatedly, and after a few rounds all the way to their start
 //!   (always collision-free), or carried rigidly with the obstacle that hits them. This is a CCD-limited step, applied only to the vertices that need it. A pair
@@ -25,7 +26,7 @@ use super::ccd::{
 use super::distance::{point_triangle, segment_segment};
 use super::settings::Obstacle;
 use super::sweep::{Stop, obstacle_stop};
-use super::zones::Zones;
+use super::zones::{Refusal, Zones};
 use crate::math::Vec3;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -392,7 +393,6 @@ pub fn failsafe(
     // round has a hit with an obstacle, a zone whose new path stage 1's rule for the analytic
     // obstacles would stop, or zones that make no progress; from then on the hit vertices are
     // pulled back along their paths (after zones, straight to their start: no partial rounds).
-    let mut zones = Some(Zones::new(n));
     let clear = |i: usize, end: Vec3| {
         (analytic.iter()).all(|o| obstacle_stop(o, x0[i], end, t0, h, stop).is_none())
     };
@@ -402,81 +402,111 @@ pub fn failsafe(
     // can need many rounds: a stopped vertex can make its neighbours' triangles hit something
     // new).
     let max_rounds = PARTIAL_ROUNDS + 2 * n + 16;
-    for round in 0..max_rounds {
-        report.rounds = round + 1;
-        if hits.is_empty() {
-            x1.copy_from_slice(&ye[..n]);
-            report.candidates = tested.into_inner();
-            return Ok(report);
-        }
-        report.ccd_hits += hits.len();
-        moved.iter_mut().for_each(|m| *m = false);
-        if let Some(z) = &mut zones {
-            let cloth = hits
-                .values()
-                .all(|(ids, _)| ids.iter().all(|&i| is_cloth(i)));
-            let pairs = hits.values().map(|(ids, _)| ids);
-            if cloth && z.translate(pairs, x0, &start, pinned, &clear, &mut ye[..n], &mut moved) {
-                report.zone_rounds += 1;
-                let cand = boxes.touching(&moved, &ys0, &ye);
-                hits.retain(|_, (ids, _)| !ids.iter().any(|&i| moved[i as usize]));
-                hits.extend(all_hits(&cand, &ye));
-                continue;
+    // When that fails after the zones were refused only by their strict rules (a zone vertex
+    // blocked by an obstacle, pinned vertices moving alike only up to rounding), the rounds
+    // start over from the first round's hits with partial zones, which move the vertices they
+    // can (`Refusal::Strict`): a zone that holds a handle's vertices and cloth lying on a
+    // collider can neither follow the handle whole nor be pulled back from it. Only a step
+    // that would fail is resolved again, so every other step's result is the same.
+    let first_hits = hits.clone();
+    let mut strict = false;
+    let mut failure = String::new();
+    for partial in [false, true] {
+        if partial {
+            if !strict {
+                break;
             }
-            zones = None;
-        }
-        let mut carry_changed = false;
-        for (ids, s) in hits.values() {
-            let obstacle = ids
-                .iter()
-                .find(|&&i| !is_cloth(i))
-                .map(|&i| owner[i as usize - n]);
-            let all_back = ids
-                .iter()
-                .filter(|&&i| is_cloth(i))
-                .all(|&i| frac[i as usize] == 0.0 || pinned[i as usize]);
-            for &i in ids.iter().filter(|&&i| is_cloth(i)) {
-                let i = i as usize;
-                if pinned[i] {
-                    continue;
-                }
-                let before = (frac[i], carried[i]);
-                if all_back {
-                    if let Some(k) = obstacle {
-                        carried[i] = Some(k);
-                    }
-                } else if report.zone_rounds == 0 && round < PARTIAL_ROUNDS {
-                    frac[i] = frac[i].min(frac[i] * 0.5 * s);
-                } else {
-                    frac[i] = 0.0;
-                }
-                moved[i] |= (frac[i], carried[i]) != before;
-                carry_changed |= carried[i] != before.1;
-            }
-        }
-        if !moved.iter().any(|&m| m) {
-            let first = hits.values().next().map_or([0; 4], |h| h.0);
-            return Err(stuck_message(&first, n, pinned));
-        }
-        for i in (0..n).filter(|&i| moved[i]) {
-            ye[i] = match carried[i] {
-                Some(k) => obstacles[k].collider.carry(x0[i], t0, t0 + h),
-                None => x0[i] + frac[i] * (start[i] - x0[i]),
-            };
-        }
-        if carry_changed {
+            ye[..n].copy_from_slice(&start);
+            frac.iter_mut().for_each(|f| *f = 1.0);
+            carried.iter_mut().for_each(|c| *c = None);
+            hits = first_hits.clone();
             boxes = SweptBoxes::cached(&ys0, &ye, &tris, &all_edges, margin, cache);
             report.builds += 1;
-            hits = all_hits(&boxes.close(&ys0, &ye), &ye);
-            continue;
         }
-        let cand = boxes.touching(&moved, &ys0, &ye);
-        hits.retain(|_, (ids, _)| !ids.iter().any(|&i| moved[i as usize]));
-        hits.extend(all_hits(&cand, &ye));
+        let (mut zones, zone_rounds) = (Some(Zones::new(n)), report.zone_rounds);
+        failure = format!(
+            "collisions could not be resolved after {max_rounds} rounds of continuous collision detection"
+        );
+        for round in 0..max_rounds {
+            report.rounds += 1;
+            if hits.is_empty() {
+                x1.copy_from_slice(&ye[..n]);
+                report.candidates = tested.into_inner();
+                return Ok(report);
+            }
+            report.ccd_hits += hits.len();
+            moved.iter_mut().for_each(|m| *m = false);
+            if let Some(z) = &mut zones {
+                let cloth = hits
+                    .values()
+                    .all(|(ids, _)| ids.iter().all(|&i| is_cloth(i)));
+                let pairs = hits.values().map(|(ids, _)| ids);
+                let zoned = cloth.then(|| {
+                    let ye = &mut ye[..n];
+                    z.translate(pairs, x0, &start, pinned, &clear, partial, ye, &mut moved)
+                });
+                if zoned == Some(Ok(())) {
+                    report.zone_rounds += 1;
+                    let cand = boxes.touching(&moved, &ys0, &ye);
+                    hits.retain(|_, (ids, _)| !ids.iter().any(|&i| moved[i as usize]));
+                    hits.extend(all_hits(&cand, &ye));
+                    continue;
+                }
+                strict |= zoned == Some(Err(Refusal::Strict));
+                zones = None;
+            }
+            let mut carry_changed = false;
+            for (ids, s) in hits.values() {
+                let obstacle = ids
+                    .iter()
+                    .find(|&&i| !is_cloth(i))
+                    .map(|&i| owner[i as usize - n]);
+                let all_back = ids
+                    .iter()
+                    .filter(|&&i| is_cloth(i))
+                    .all(|&i| frac[i as usize] == 0.0 || pinned[i as usize]);
+                for &i in ids.iter().filter(|&&i| is_cloth(i)) {
+                    let i = i as usize;
+                    if pinned[i] {
+                        continue;
+                    }
+                    let before = (frac[i], carried[i]);
+                    if all_back {
+                        if let Some(k) = obstacle {
+                            carried[i] = Some(k);
+                        }
+                    } else if report.zone_rounds == zone_rounds && round < PARTIAL_ROUNDS {
+                        frac[i] = frac[i].min(frac[i] * 0.5 * s);
+                    } else {
+                        frac[i] = 0.0;
+                    }
+                    moved[i] |= (frac[i], carried[i]) != before;
+                    carry_changed |= carried[i] != before.1;
+                }
+            }
+            if !moved.iter().any(|&m| m) {
+                let first = hits.values().next().map_or([0; 4], |h| h.0);
+                failure = stuck_message(&first, n, pinned);
+                break;
+            }
+            for i in (0..n).filter(|&i| moved[i]) {
+                ye[i] = match carried[i] {
+                    Some(k) => obstacles[k].collider.carry(x0[i], t0, t0 + h),
+                    None => x0[i] + frac[i] * (start[i] - x0[i]),
+                };
+            }
+            if carry_changed {
+                boxes = SweptBoxes::cached(&ys0, &ye, &tris, &all_edges, margin, cache);
+                report.builds += 1;
+                hits = all_hits(&boxes.close(&ys0, &ye), &ye);
+                continue;
+            }
+            let cand = boxes.touching(&moved, &ys0, &ye);
+            hits.retain(|_, (ids, _)| !ids.iter().any(|&i| moved[i as usize]));
+            hits.extend(all_hits(&cand, &ye));
+        }
     }
-    Err(format!(
-        "collisions could not be resolved after {max_rounds} rounds of continuous collision detection"
-    ))
+    Err(failure)
 }
 
 #[cfg(test)]
@@ -527,9 +557,12 @@ mod tests {
                     &start,
                     &pinned,
                     &|_, _| true,
+                    false,
                     &mut ye,
                     &mut moved,
-                ) {
+                )
+                .is_ok()
+                {
                     zone_rounds += 1;
                     continue;
                 }

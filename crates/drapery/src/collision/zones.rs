@@ -45,10 +45,13 @@ impl Zones {
     /// Merges the vertices of each colliding pair into one zone, then sets every zone vertex's
     /// end position `ye` to its start `x0` plus its zone's displacement (`start - x0` averaged
     /// over the zone, or the pinned vertices' common displacement), marking in `moved` those
-    /// whose end changed. Returns false, changing nothing in `ye`, when some zone has pinned
-    /// vertices that move differently, when `clear(i, end)` is false for a vertex `i` whose end
-    /// would change (its new path meets an obstacle), or when no end position changed (the zones
-    /// cannot make progress). `pairs` must name cloth vertices only.
+    /// whose end changed. Changes nothing in `ye` and returns why when some zone has pinned
+    /// vertices that move differently or no end position changed (the zones cannot make
+    /// progress, [`Refusal::Stuck`]), or when `clear(i, end)` is false for a vertex `i` whose
+    /// end would change (its new path meets an obstacle) or pinned vertices move alike only up
+    /// to rounding ([`Refusal::Strict`]). With `partial` such vertices keep their ends instead,
+    /// and the others move (see [`Refusal::Strict`]).
+    /// `pairs` must name cloth vertices only.
     #[allow(clippy::too_many_arguments)]
     pub fn translate<'a>(
         &mut self,
@@ -57,9 +60,10 @@ impl Zones {
         start: &[Vec3],
         pinned: &[bool],
         clear: &(dyn Fn(usize, Vec3) -> bool + Sync),
+        partial: bool,
         ye: &mut [Vec3],
         moved: &mut [bool],
-    ) -> bool {
+    ) -> Result<(), Refusal> {
         for ids in pairs {
             let mut r = self.root(ids[0]);
             for &i in ids {
@@ -78,6 +82,9 @@ impl Zones {
         let mut sum = vec![Vec3::ZERO; n];
         let mut count = vec![0u32; n];
         let mut pin: Vec<Option<Vec3>> = vec![None; n];
+        // pinned vertices that move alike only up to rounding (a handle's vertices, each its
+        // own target less its own position), which the strict mode refuses
+        let mut rounding = false;
         for i in 0..n {
             if !self.member[i] {
                 continue;
@@ -90,7 +97,8 @@ impl Zones {
                 match pin[r] {
                     None => pin[r] = Some(d),
                     Some(p) if p == d => {}
-                    Some(_) => return false,
+                    Some(p) if alike(p, d, x0[i], start[i]) => rounding = true,
+                    Some(_) => return Err(Refusal::Stuck),
                 }
             }
         }
@@ -106,15 +114,44 @@ impl Zones {
                 ends.push((i, end));
             }
         }
-        if ends.is_empty() || !ends.iter().all(|&(i, end)| clear(i, end)) {
-            return false;
+        let before = ends.len();
+        ends.retain(|&(i, end)| clear(i, end));
+        if (rounding || ends.len() < before) && !partial {
+            return Err(Refusal::Strict);
+        }
+        if ends.is_empty() {
+            return Err(Refusal::Stuck);
         }
         for (i, end) in ends {
             ye[i] = end;
             moved[i] = true;
         }
-        true
+        Ok(())
     }
+}
+
+/// Whether two pinned vertices' displacements `p` and `d` (the second from `x0` to `start`)
+/// differ by rounding alone: by at most `10⁻¹²` of the coordinates, thousands of times the
+/// rounding of a difference of two positions.
+fn alike(p: Vec3, d: Vec3, x0: Vec3, start: Vec3) -> bool {
+    let scale = x0.abs().max_element() + start.abs().max_element();
+    (p - d).abs().max_element() <= 1e-12 * scale
+}
+
+/// Why [`Zones::translate`] moved nothing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Refusal {
+    /// Only the strict mode's rules refused: a zone vertex's new path meets an obstacle, or a
+    /// zone's pinned vertices move alike only up to rounding. Without `partial` the zones then
+    /// give way to the pull-back. With it, a blocked vertex keeps its end and the rest of its
+    /// zone moves, by the first pinned vertex's displacement where the zone has pinned
+    /// vertices (each of them keeps its own). The zone is then no longer exactly a
+    /// translation, and the CCD rounds that follow find what it left colliding. That is what a
+    /// zone holding a handle's vertices and cloth lying on a collider needs: the handle cannot
+    /// be pulled back, and the whole zone cannot follow it.
+    Strict,
+    /// No end would change, or a zone's pinned vertices move differently.
+    Stuck,
 }
 
 #[cfg(test)]
@@ -133,11 +170,20 @@ mod tests {
         let pairs = [[0, 1, 2, 3], [2, 4, 5, 6]];
         type Clear<'a> = &'a (dyn Fn(usize, Vec3) -> bool + Sync);
         let go = |z: &mut Zones, clear: Clear, ye: &mut [Vec3], moved: &mut [bool]| {
-            z.translate(pairs.iter(), &x0, &start, &[false; 8], clear, ye, moved)
+            z.translate(
+                pairs.iter(),
+                &x0,
+                &start,
+                &[false; 8],
+                clear,
+                false,
+                ye,
+                moved,
+            )
         };
         let (mut ye, mut moved) = (start.clone(), vec![false; 8]);
         let mut z = Zones::new(8);
-        assert!(go(&mut z, &|_, _| true, &mut ye, &mut moved));
+        assert_eq!(go(&mut z, &|_, _| true, &mut ye, &mut moved), Ok(()));
         let mean = (0..7).map(|i| start[i] - x0[i]).sum::<Vec3>() / 7.0;
         for i in 0..7 {
             assert!((ye[i] - x0[i] - mean).length() < 1e-15);
@@ -150,11 +196,80 @@ mod tests {
         assert!(!moved[7]);
         // the same pairs again: nothing changes, no progress
         moved.iter_mut().for_each(|m| *m = false);
-        assert!(!go(&mut z, &|_, _| true, &mut ye, &mut moved));
+        assert_eq!(
+            go(&mut z, &|_, _| true, &mut ye, &mut moved),
+            Err(Refusal::Stuck)
+        );
         // a zone whose path meets an obstacle does not move
         let mut ye = start.clone();
-        assert!(!go(&mut Zones::new(8), &|i, _| i != 3, &mut ye, &mut moved));
+        assert_eq!(
+            go(&mut Zones::new(8), &|i, _| i != 3, &mut ye, &mut moved),
+            Err(Refusal::Strict)
+        );
         assert_eq!(ye, start);
+    }
+
+    #[test]
+    fn a_partial_zone_moves_the_vertices_whose_paths_are_clear() {
+        // vertex 0 pinned and moving; 1..4 free, their own paths spread; vertex 2's new path
+        // meets an obstacle
+        let x0: Vec<Vec3> = (0..4).map(|i| Vec3::new(i as f64, 0.0, 0.0)).collect();
+        let d = Vec3::new(0.3, -0.1, 0.0);
+        let start: Vec<Vec3> = (0..4)
+            .map(|i| {
+                x0[i]
+                    + if i == 0 {
+                        d
+                    } else {
+                        Vec3::new(0.0, 0.05 * i as f64, 0.0)
+                    }
+            })
+            .collect();
+        let pinned = [true, false, false, false];
+        let clear = |i: usize, _: Vec3| i != 2;
+        let go = |partial: bool, ye: &mut [Vec3], moved: &mut [bool]| {
+            let pairs = [[0, 1, 2, 3]];
+            Zones::new(4).translate(
+                pairs.iter(),
+                &x0,
+                &start,
+                &pinned,
+                &clear,
+                partial,
+                ye,
+                moved,
+            )
+        };
+        let (mut ye, mut moved) = (start.clone(), [false; 4]);
+        assert_eq!(go(false, &mut ye, &mut moved), Err(Refusal::Strict));
+        assert_eq!(ye, start);
+        assert_eq!(go(true, &mut ye, &mut moved), Ok(()));
+        // the clear ones follow the pinned vertex, which keeps its own end; vertex 2 stays
+        assert_eq!(ye[0], start[0]);
+        for i in [1, 3] {
+            assert_eq!(ye[i], x0[i] + d);
+            assert!(moved[i]);
+        }
+        assert_eq!(ye[2], start[2]);
+        assert!(!moved[2] && !moved[0]);
+        // nothing left to move: no progress
+        let mut moved = [false; 4];
+        let pairs = [[0, 1, 2, 3]];
+        let mut z = Zones::new(4);
+        let mut ye2 = ye.clone();
+        assert_eq!(
+            z.translate(
+                pairs.iter(),
+                &x0,
+                &start,
+                &pinned,
+                &clear,
+                true,
+                &mut ye2,
+                &mut moved
+            ),
+            Err(Refusal::Stuck)
+        );
     }
 
     #[test]
@@ -172,10 +287,11 @@ mod tests {
                 start,
                 pinned,
                 &|_, _| true,
+                false,
                 &mut ye,
                 &mut [false; 4],
             );
-            ok.then_some(ye)
+            ok.is_ok().then_some(ye)
         };
         let mut pinned = [true, false, false, false];
         // the pinned vertex does not move, so neither does its zone
@@ -184,5 +300,63 @@ mod tests {
         pinned[3] = true;
         start[3] += Vec3::new(0.1, 0.0, 0.0);
         assert_eq!(zone(&start, &pinned), None);
+    }
+
+    #[test]
+    fn pinned_vertices_that_move_alike_up_to_rounding_move_a_partial_zone() {
+        // a handle's two vertices, each at its own target: the same displacement but for the
+        // last bit of one coordinate
+        let x0: Vec<Vec3> = (0..4)
+            .map(|i| Vec3::new(0.3 * i as f64, 0.7, 0.1))
+            .collect();
+        let d = Vec3::new(0.006666666666666671, -0.00075, 0.0025);
+        let d3 = Vec3::new(d.x, d.y, f64::from_bits(d.z.to_bits() + 1));
+        let start = [
+            x0[0] + d,
+            x0[1],
+            x0[2] + Vec3::new(0.0, 0.01, 0.0),
+            x0[3] + d3,
+        ];
+        let pinned = [true, false, false, true];
+        let go = |partial: bool, ye: &mut [Vec3]| {
+            let pairs = [[0, 1, 2, 3]];
+            let clear = |_: usize, _: Vec3| true;
+            let moved = &mut [false; 4];
+            Zones::new(4).translate(
+                pairs.iter(),
+                &x0,
+                &start,
+                &pinned,
+                &clear,
+                partial,
+                ye,
+                moved,
+            )
+        };
+        let mut ye = start.to_vec();
+        assert_eq!(go(false, &mut ye), Err(Refusal::Strict));
+        assert_eq!(ye, start);
+        assert_eq!(go(true, &mut ye), Ok(()));
+        assert_eq!([ye[0], ye[3]], [start[0], start[3]]);
+        for i in [1, 2] {
+            assert_eq!(ye[i], x0[i] + d);
+        }
+        // a real difference is not rounding
+        let mut far = start;
+        far[3] += Vec3::new(1e-9, 0.0, 0.0);
+        let mut ye = far.to_vec();
+        let pairs = [[0, 1, 2, 3]];
+        let moved = &mut [false; 4];
+        let out = Zones::new(4).translate(
+            pairs.iter(),
+            &x0,
+            &far,
+            &pinned,
+            &|_, _| true,
+            true,
+            &mut ye,
+            moved,
+        );
+        assert_eq!(out, Err(Refusal::Stuck));
     }
 }
