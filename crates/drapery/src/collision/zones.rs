@@ -209,67 +209,59 @@ mod tests {
         assert_eq!(ye, start);
     }
 
+    /// The zones of the one pair `[0, 1, 2, 3]` from a fresh start ([`Zones::translate`]), with
+    /// `ye` the ends on entry and on exit; the outcome and which ends changed.
+    fn one_pair(
+        x0: &[Vec3],
+        start: &[Vec3],
+        pinned: &[bool],
+        clear: &(dyn Fn(usize, Vec3) -> bool + Sync),
+        partial: bool,
+        ye: &mut [Vec3],
+    ) -> (Result<(), Refusal>, [bool; 4]) {
+        let mut moved = [false; 4];
+        let pairs = [[0, 1, 2, 3]];
+        let mut z = Zones::new(4);
+        let out = z.translate(
+            pairs.iter(),
+            x0,
+            start,
+            pinned,
+            clear,
+            partial,
+            ye,
+            &mut moved,
+        );
+        (out, moved)
+    }
+
     #[test]
     fn a_partial_zone_moves_the_vertices_whose_paths_are_clear() {
         // vertex 0 pinned and moving; 1..4 free, their own paths spread; vertex 2's new path
         // meets an obstacle
         let x0: Vec<Vec3> = (0..4).map(|i| Vec3::new(i as f64, 0.0, 0.0)).collect();
         let d = Vec3::new(0.3, -0.1, 0.0);
-        let start: Vec<Vec3> = (0..4)
-            .map(|i| {
-                x0[i]
-                    + if i == 0 {
-                        d
-                    } else {
-                        Vec3::new(0.0, 0.05 * i as f64, 0.0)
-                    }
-            })
+        let mut start: Vec<Vec3> = (0..4)
+            .map(|i| x0[i] + Vec3::new(0.0, 0.05 * i as f64, 0.0))
             .collect();
+        start[0] = x0[0] + d;
         let pinned = [true, false, false, false];
         let clear = |i: usize, _: Vec3| i != 2;
-        let go = |partial: bool, ye: &mut [Vec3], moved: &mut [bool]| {
-            let pairs = [[0, 1, 2, 3]];
-            Zones::new(4).translate(
-                pairs.iter(),
-                &x0,
-                &start,
-                &pinned,
-                &clear,
-                partial,
-                ye,
-                moved,
-            )
-        };
-        let (mut ye, mut moved) = (start.clone(), [false; 4]);
-        assert_eq!(go(false, &mut ye, &mut moved), Err(Refusal::Strict));
-        assert_eq!(ye, start);
-        assert_eq!(go(true, &mut ye, &mut moved), Ok(()));
+        let mut ye = start.clone();
+        let (out, _) = one_pair(&x0, &start, &pinned, &clear, false, &mut ye);
+        assert_eq!((out, &ye), (Err(Refusal::Strict), &start));
+        let (out, moved) = one_pair(&x0, &start, &pinned, &clear, true, &mut ye);
+        assert_eq!(out, Ok(()));
         // the clear ones follow the pinned vertex, which keeps its own end; vertex 2 stays
         assert_eq!(ye[0], start[0]);
         for i in [1, 3] {
             assert_eq!(ye[i], x0[i] + d);
-            assert!(moved[i]);
         }
         assert_eq!(ye[2], start[2]);
-        assert!(!moved[2] && !moved[0]);
+        assert_eq!(moved, [false, true, false, true]);
         // nothing left to move: no progress
-        let mut moved = [false; 4];
-        let pairs = [[0, 1, 2, 3]];
-        let mut z = Zones::new(4);
-        let mut ye2 = ye.clone();
-        assert_eq!(
-            z.translate(
-                pairs.iter(),
-                &x0,
-                &start,
-                &pinned,
-                &clear,
-                true,
-                &mut ye2,
-                &mut moved
-            ),
-            Err(Refusal::Stuck)
-        );
+        let (out, _) = one_pair(&x0, &start, &pinned, &clear, true, &mut ye);
+        assert_eq!(out, Err(Refusal::Stuck));
     }
 
     #[test]
@@ -281,16 +273,7 @@ mod tests {
         // one pair's zone from a fresh start; the end positions it leaves, or None
         let zone = |start: &[Vec3], pinned: &[bool]| {
             let mut ye = start.to_vec();
-            let ok = Zones::new(4).translate(
-                [[0, 1, 2, 3]].iter(),
-                &x0,
-                start,
-                pinned,
-                &|_, _| true,
-                false,
-                &mut ye,
-                &mut [false; 4],
-            );
+            let (ok, _) = one_pair(&x0, start, pinned, &|_, _| true, false, &mut ye);
             ok.is_ok().then_some(ye)
         };
         let mut pinned = [true, false, false, false];
@@ -318,25 +301,12 @@ mod tests {
             x0[3] + d3,
         ];
         let pinned = [true, false, false, true];
-        let go = |partial: bool, ye: &mut [Vec3]| {
-            let pairs = [[0, 1, 2, 3]];
-            let clear = |_: usize, _: Vec3| true;
-            let moved = &mut [false; 4];
-            Zones::new(4).translate(
-                pairs.iter(),
-                &x0,
-                &start,
-                &pinned,
-                &clear,
-                partial,
-                ye,
-                moved,
-            )
-        };
+        let clear = |_: usize, _: Vec3| true;
         let mut ye = start.to_vec();
-        assert_eq!(go(false, &mut ye), Err(Refusal::Strict));
-        assert_eq!(ye, start);
-        assert_eq!(go(true, &mut ye), Ok(()));
+        let (out, _) = one_pair(&x0, &start, &pinned, &clear, false, &mut ye);
+        assert_eq!((out, &ye[..]), (Err(Refusal::Strict), &start[..]));
+        let (out, _) = one_pair(&x0, &start, &pinned, &clear, true, &mut ye);
+        assert_eq!(out, Ok(()));
         assert_eq!([ye[0], ye[3]], [start[0], start[3]]);
         for i in [1, 2] {
             assert_eq!(ye[i], x0[i] + d);
@@ -345,18 +315,7 @@ mod tests {
         let mut far = start;
         far[3] += Vec3::new(1e-9, 0.0, 0.0);
         let mut ye = far.to_vec();
-        let pairs = [[0, 1, 2, 3]];
-        let moved = &mut [false; 4];
-        let out = Zones::new(4).translate(
-            pairs.iter(),
-            &x0,
-            &far,
-            &pinned,
-            &|_, _| true,
-            true,
-            &mut ye,
-            moved,
-        );
+        let (out, _) = one_pair(&x0, &far, &pinned, &clear, true, &mut ye);
         assert_eq!(out, Err(Refusal::Stuck));
     }
 }
