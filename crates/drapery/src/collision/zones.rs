@@ -13,6 +13,10 @@
 //!
 //! A zone's displacement is the mean of its vertices' (their momentum, for equal masses); a zone
 //! with pinned vertices moves as they do, and cannot translate if they move differently.
+//!
+//! Partial zones, the fail-safe's second try at a step that would otherwise fail, move what they
+//! can: a vertex whose new path meets an obstacle keeps its end, and pinned vertices that move
+//! alike up to rounding move their zone by the first one's displacement ([`Refusal::Strict`]).
 
 use crate::math::Vec3;
 
