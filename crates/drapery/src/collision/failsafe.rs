@@ -410,7 +410,8 @@ pub fn failsafe(
     // that would fail is resolved again, so every other step's result is the same.
     let first_hits = hits.clone();
     let mut strict = false;
-    let mut failure = String::new();
+    // the last try's pair that nothing could move, if it ended on one (else the round cap)
+    let mut stuck = None;
     for partial in [false, true] {
         if partial {
             if !strict {
@@ -424,9 +425,7 @@ pub fn failsafe(
             report.builds += 1;
         }
         let (mut zones, zone_rounds) = (Some(Zones::new(n)), report.zone_rounds);
-        failure = format!(
-            "collisions could not be resolved after {max_rounds} rounds of continuous collision detection"
-        );
+        stuck = None;
         for round in 0..max_rounds {
             report.rounds += 1;
             if hits.is_empty() {
@@ -486,7 +485,7 @@ pub fn failsafe(
             }
             if !moved.iter().any(|&m| m) {
                 let first = hits.values().next().map_or([0; 4], |h| h.0);
-                failure = stuck_message(&first, n, pinned);
+                stuck = Some(stuck_message(&first, n, pinned));
                 break;
             }
             for i in (0..n).filter(|&i| moved[i]) {
@@ -506,7 +505,11 @@ pub fn failsafe(
             hits.extend(all_hits(&cand, &ye));
         }
     }
-    Err(failure)
+    Err(stuck.unwrap_or_else(|| {
+        format!(
+            "collisions could not be resolved after {max_rounds} rounds of continuous collision detection"
+        )
+    }))
 }
 
 #[cfg(test)]
