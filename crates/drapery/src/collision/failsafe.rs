@@ -8,8 +8,8 @@
 //! * vertex–triangle and edge–edge continuous collision detection runs over the cloth (self and
 //!   cloth–cloth) and against mesh obstacles; the vertices of colliding cloth pairs first move as
 //!   impact zones that translate by their mean displacement (`zones`; in a step that would
-//!   otherwise fail, a second try with partial zones, which move the vertices they can); when that cannot
-//!   be done, the cloth vertices of a colliding pair are pulled back along their own paths to
+//!   otherwise fail, a second try with partial zones, which move the vertices they can); when
+//!   that cannot be done, the cloth vertices of a colliding pair are pulled back along their own paths to
 //!   half the time of impact, repeatedly, and after a few rounds all the way to their start
 //!   (always collision-free), or carried rigidly with the obstacle that hits them. This is a CCD-limited step, applied only to the vertices that need it. A pair
 //!   that starts closer than the CCD tolerance is held if it would touch, and no pair may end
@@ -408,7 +408,6 @@ pub fn failsafe(
     // can (`Refusal::Strict`): a zone that holds a handle's vertices and cloth lying on a
     // collider can neither follow the handle whole nor be pulled back from it. Only a step
     // that would fail is resolved again, so every other step's result is the same.
-    let first_hits = hits.clone();
     let mut strict = false;
     // the last try's pair that nothing could move, if it ended on one (else the round cap)
     let mut stuck = None;
@@ -420,9 +419,10 @@ pub fn failsafe(
             ye[..n].copy_from_slice(&start);
             frac.iter_mut().for_each(|f| *f = 1.0);
             carried.iter_mut().for_each(|c| *c = None);
-            hits = first_hits.clone();
+            // the first round's boxes and hits again (as after a carry)
             boxes = SweptBoxes::cached(&ys0, &ye, &tris, &all_edges, margin, cache);
             report.builds += 1;
+            hits = all_hits(&boxes.close(&ys0, &ye), &ye);
         }
         let (mut zones, zone_rounds) = (Some(Zones::new(n)), report.zone_rounds);
         stuck = None;
