@@ -11,6 +11,7 @@ pub fn report_dict<'py>(py: Python<'py>, r: &StepReport) -> PyResult<Bound<'py, 
     d.set_item("newton_iterations", r.newton_iterations)?;
     d.set_item("cg_iterations", r.cg_iterations)?;
     d.set_item("linear_solves", r.linear_solves)?;
+    d.set_item("rough_solves", r.rough_solves)?;
     d.set_item("residual", r.residual)?;
     d.set_item("tolerance", r.tolerance)?;
     d.set_item("assembly_seconds", r.assembly_seconds)?;

@@ -191,6 +191,11 @@ impl ActiveSet {
         self.guess && !self.candidates.is_empty()
     }
 
+    /// How many candidates there are.
+    pub fn len(&self) -> usize {
+        self.candidates.len()
+    }
+
     /// True when there are no candidates.
     pub fn is_empty(&self) -> bool {
         self.candidates.is_empty()
@@ -250,8 +255,8 @@ impl ActiveSet {
 
     /// Flips held contacts that pull (beyond a relative `1e-9` of the largest held impulse) and
     /// released ones whose solved normal velocity `n·(v + dv)` is below the prescribed one by
-    /// more than `sink_tolerance`. Returns whether anything changed.
-    pub fn update(&mut self, v: &[Vec3], dv: &[Vec3], sink_tolerance: f64) -> bool {
+    /// more than `sink_tolerance`. Returns how many flipped.
+    pub fn update(&mut self, v: &[Vec3], dv: &[Vec3], sink_tolerance: f64) -> usize {
         let scale = self
             .candidates
             .iter()
@@ -259,7 +264,7 @@ impl ActiveSet {
             .zip(&self.active)
             .filter(|(_, a)| **a)
             .fold(0.0f64, |m, ((_, l), _)| m.max(l.abs()));
-        let mut changed = false;
+        let mut flipped = 0;
         for ((ct, l), a) in self
             .candidates
             .iter()
@@ -274,10 +279,10 @@ impl ActiveSet {
             };
             if flip {
                 *a = !*a;
-                changed = true;
+                flipped += 1;
             }
         }
-        changed
+        flipped
     }
 
     /// The held contacts and their impulses.
@@ -423,16 +428,16 @@ mod tests {
         let dv = [Vec3::ZERO, Vec3::ZERO];
         set.measure(Split::whole(&a), &rhs, &dv);
         // particle 0 is pushed up by the constraint (rhs pulls it down), particle 1 pulled down
-        assert!(set.update(&[Vec3::ZERO; 2], &dv, 1e-3));
+        assert_eq!(set.update(&[Vec3::ZERO; 2], &dv, 1e-3), 1);
         let (held, impulse) = set.held();
         assert_eq!(held.len(), 1);
         assert_eq!((held[0].particle, impulse[0]), (0, 1.0));
         // released particle 1 now sinks below the prescribed normal velocity: held again
         let sinking = [Vec3::ZERO, Vec3::new(0.0, -1.0, 0.0)];
-        assert!(set.update(&sinking, &dv, 1e-3));
+        assert_eq!(set.update(&sinking, &dv, 1e-3), 1);
         assert_eq!(set.held().0.len(), 2);
         // nothing to flip: unchanged
         set.measure(Split::whole(&a), &[Vec3::new(0.0, -1.0, 0.0); 2], &dv);
-        assert!(!set.update(&[Vec3::ZERO; 2], &dv, 1e-3));
+        assert_eq!(set.update(&[Vec3::ZERO; 2], &dv, 1e-3), 0);
     }
 }

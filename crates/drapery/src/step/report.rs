@@ -96,6 +96,10 @@ pub struct StepReport {
     pub cg_iterations: usize,
     /// Linear solves (more than one per Newton iteration when contacts were released).
     pub linear_solves: usize,
+    /// Of the linear solves, the *rough* rounds of the obstacle active set: solved only to
+    /// `1e-4` in a step solved tighter, because the round before flipped many contacts
+    /// (docs/MATH.md §14).
+    pub rough_solves: usize,
     /// Preconditioner set-ups (multigrid refreshes) over the linear solves: a solve whose
     /// initial guess already met the tolerance needs none.
     pub preconditioner_setups: usize,

@@ -602,3 +602,47 @@ velocity = [1.0, 0.0, 0.0]
             .all(|p| p.y == 0.3)
     );
 }
+
+/// docs/MATH.md §14, rough rounds: where a cloth lands on the spinning sphere, the active set
+/// releases contacts ring by ring over several rounds, and the rounds after one that flipped
+/// many are solved only to 1e-4. They must end on the contacts of exact solves: the direct
+/// solver's rounds (exact, so never rough) hold as many particles in every step of the
+/// landing, and the cloth ends where it does.
+#[test]
+fn rough_rounds_end_on_the_contacts_of_exact_solves() {
+    use drapery::presets::Preset;
+    let n = 48;
+    let (h, _) = Preset::Spin.step();
+    let run = |linear_solver| {
+        let settings = SolverSettings {
+            tolerance: 1e-9,
+            max_iterations: 20_000,
+            linear_solver,
+            ..Default::default()
+        };
+        Simulation::new(Preset::Spin.model(n).unwrap(), settings).unwrap()
+    };
+    let (mut pcg, mut direct) = (
+        run(drapery::LinearSolver::Pcg),
+        run(drapery::LinearSolver::Direct),
+    );
+    let (mut rough, mut contacts) = (0, 0);
+    for k in 0..14 {
+        let (a, b) = (pcg.step(h).unwrap(), direct.step(h).unwrap());
+        assert_eq!(b.rough_solves, 0, "step {k}: exact solves are never rough");
+        assert!(a.linear_solves < 8, "step {k}: the rounds ran out ({a:?})");
+        assert_eq!(a.obstacle_contacts, b.obstacle_contacts, "step {k}");
+        rough += a.rough_solves;
+        contacts = contacts.max(a.obstacle_contacts);
+        let apart = (pcg
+            .model()
+            .positions()
+            .iter()
+            .zip(direct.model().positions()))
+        .map(|(p, q)| (*p - *q).length())
+        .fold(0.0, f64::max);
+        assert!(apart < 1e-6, "step {k}: {apart} m apart");
+    }
+    assert!(contacts > 50, "the cloth lands: {contacts} contacts");
+    assert!(rough > 0, "the landing took rough rounds");
+}
