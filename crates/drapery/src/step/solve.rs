@@ -116,8 +116,7 @@ pub(crate) fn on_active_set(
     // matrix, and a resumed run, whose multigrid starts empty, would not repeat them.
     let mut set_up = false;
     // the direct solver's solves are exact: never rough
-    let tight =
-        settings.linear_solver == LinearSolver::Pcg && settings.tolerance < ROUND_TOLERANCE;
+    let tight = settings.linear_solver == LinearSolver::Pcg && settings.tolerance < ROUND_TOLERANCE;
     let rough_settings = SolverSettings {
         tolerance: ROUND_TOLERANCE,
         ..*settings
