@@ -11,6 +11,11 @@
 //! vertex–edge or vertex–vertex proximities, already represented by a vertex–triangle pair of a
 //! triangle adjacent to the edge (counting them twice would double the force). Free line
 //! elements (edges without triangles) therefore only repel in their interiors.
+//!
+//! [`closest_only`] then keeps, among a vertex's pairs with the triangles around one edge or
+//! vertex of the other surface, only the closest: a vertex over a triangle near its edge is
+//! also within the thickness of the triangle across the edge, but that pair's closest point is
+//! on the edge and its normal oblique, and its force would push the vertex along the surface.
 
 use super::broad_phase::Candidates;
 use super::distance::{may_meet_inside_within, point_triangle, segment_segment};
@@ -133,6 +138,58 @@ pub fn proximities(
     out
 }
 
+/// Drops every vertex–triangle stencil of `stencils` (in [`proximities`]' order: a vertex's
+/// pairs together) whose closest point lies on an edge or at a vertex of its triangle (a
+/// barycentric weight is zero) when another of the same vertex's stencils has a triangle that
+/// also holds that edge or vertex and is closer (or as close and earlier in the list).
+///
+/// So the contact of a vertex with one smooth patch of surface is its pair with the closest
+/// triangle, as for the distance to the surface itself. The dropped pairs are the vertex's
+/// distances to the patch's edges and vertices through the triangles around them: on a flat
+/// sheet their normals lean away from the vertical, and a vertex sliding across the sheet's
+/// edges felt their stiff repulsion along the sheet (a drag with no friction at all), and a
+/// vertex exactly over an edge or a vertex was pushed two or more times over. The closest pair
+/// of each vertex is never dropped, nor a pair whose closest point is inside its triangle, nor
+/// edge–edge pairs.
+pub fn closest_only(stencils: &mut Vec<Proximity>) {
+    let vt = stencils
+        .iter()
+        .take_while(|s| s.kind == StencilKind::VertexTriangle)
+        .count();
+    let mut keep = vec![true; stencils.len()];
+    let mut start = 0;
+    while start < vt {
+        let v = stencils[start].particles[0];
+        let end = start
+            + stencils[start..vt]
+                .iter()
+                .take_while(|s| s.particles[0] == v)
+                .count();
+        for k in start..end {
+            let t = &stencils[k];
+            // the vertices of t's feature (edge or vertex) that holds the closest point
+            let feature = (1..4).filter(|&j| t.weights[j] < 0.0);
+            if feature.clone().count() == 3 {
+                continue;
+            }
+            keep[k] = !(start..end).any(|m| {
+                let u = &stencils[m];
+                m != k
+                    && (u.dist, m) < (t.dist, k)
+                    && feature
+                        .clone()
+                        .all(|j| u.particles[1..].contains(&t.particles[j]))
+            });
+        }
+        start = end;
+    }
+    let mut k = 0;
+    stencils.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -208,5 +265,56 @@ mod tests {
             .map(|p| p.particles[0])
             .collect();
         assert_eq!(vt.len(), 2 * n as usize);
+    }
+
+    /// Over a flat sheet every point at height `g` is at distance `g` from the sheet, so the
+    /// repulsion of a vertex at that height is `k (η - g)` straight up wherever it is: over a
+    /// triangle, near or on an edge, on a vertex. The vertex is within the thickness of up to
+    /// six triangles there; without [`closest_only`] it was pushed twice over an edge, six
+    /// times over a vertex, and sideways near them.
+    #[test]
+    fn a_vertex_over_a_flat_sheet_is_pushed_straight_up_as_by_its_distance() {
+        use crate::collision::repulsion::{Penalty, repulsion};
+        let sheet = Mesh::grid([1.0, 1.0], [5, 5], Vec3::ZERO, Vec3::Z).unwrap();
+        let (tris, edges) = (sheet.triangles(), sheet.edges());
+        let (eta, g) = (0.05, 0.02);
+        let penalty = Penalty {
+            thickness: eta,
+            stiffness: 1000.0,
+            tangential: false,
+        };
+        // the sheet's vertices are 0.25 apart at -0.5, -0.25, 0, 0.25, 0.5
+        let places = [
+            (0.1, 0.07),    // inside a triangle
+            (0.125, 0.0),   // over an edge's midpoint
+            (0.125, 0.004), // near that edge
+            (0.0, 0.0),     // over an inner vertex
+            (0.003, -0.002),
+            (0.25, 0.25),
+            (0.1, 0.1), // over a diagonal
+            (0.24, 0.01),
+        ];
+        for (px, py) in places {
+            let mut x = sheet.positions.clone();
+            let v = x.len() as u32;
+            x.push(Vec3::new(px, py, g));
+            let c = candidates(&x, &x, &tris, &edges, eta);
+            let mut prox = proximities(&x, &tris, &edges, &c, eta);
+            closest_only(&mut prox);
+            let mine: Vec<&Proximity> = prox.iter().filter(|p| p.particles[0] == v).collect();
+            let force: Vec3 = mine
+                .iter()
+                .map(|p| {
+                    let q = p.particles.map(|i| x[i as usize]);
+                    repulsion(&q, &p.weights, &penalty, p.normal).forces[0]
+                })
+                .sum();
+            let expected = Vec3::Z * (penalty.stiffness * (eta - g));
+            assert!(
+                (force - expected).length() < 1e-9 * expected.length(),
+                "at ({px}, {py}): {force:?} from {} stencils, expected {expected:?}",
+                mine.len()
+            );
+        }
     }
 }

@@ -58,7 +58,8 @@ impl Contacts {
 
 /// The cloth–cloth repulsion stencils at `x` among the candidate pairs `cand`: the pairs closer
 /// than `thickness` with a particle that is not pinned and not `exempt` (a seam's
-/// neighbourhood, a starting tangle).
+/// neighbourhood, a starting tangle), of a vertex's pairs with the triangles around one edge or
+/// vertex only the closest ([`crate::collision::proximity::closest_only`]).
 pub(crate) fn self_stencils(
     x: &[Vec3],
     triangles: &[[u32; 3]],
@@ -71,6 +72,7 @@ pub(crate) fn self_stencils(
     let mut stencils = proximities(x, triangles, edges, cand, thickness);
     stencils
         .retain(|s| s.particles.iter().any(|&p| !pose.pinned[p as usize]) && !exempt(&s.particles));
+    crate::collision::proximity::closest_only(&mut stencils);
     stencils
 }
 
