@@ -138,10 +138,21 @@ pub fn proximities(
     out
 }
 
+/// The vertices of a vertex–triangle stencil's triangle whose weight is not zero: the feature
+/// (an edge, a vertex, or the whole triangle) that holds the closest point.
+fn feature(s: &Proximity) -> impl Iterator<Item = u32> + Clone + '_ {
+    (1..4)
+        .filter(|&j| s.weights[j] < 0.0)
+        .map(move |j| s.particles[j])
+}
+
 /// Drops every vertex–triangle stencil of `stencils` (in [`proximities`]' order: a vertex's
 /// pairs together) whose closest point lies on an edge or at a vertex of its triangle (a
 /// barycentric weight is zero) when another of the same vertex's stencils has a triangle that
-/// also holds that edge or vertex and is closer (or as close and earlier in the list).
+/// also holds that edge or vertex and is closer (or as close and earlier in the list). Then, of
+/// two vertices close to each other, each the closest point of the other's pair (`v` with a
+/// triangle at its vertex `w`, and `w` with a triangle at `v`), only the pair of the lower
+/// numbered vertex stays: both are the same vertex–vertex contact.
 ///
 /// So the contact of a vertex with one smooth patch of surface is its pair with the closest
 /// triangle, as for the distance to the surface itself. The dropped pairs are the vertex's
@@ -149,8 +160,8 @@ pub fn proximities(
 /// sheet their normals lean away from the vertical, and a vertex sliding across the sheet's
 /// edges felt their stiff repulsion along the sheet (a drag with no friction at all), and a
 /// vertex exactly over an edge or a vertex was pushed two or more times over. The closest pair
-/// of each vertex is never dropped, nor a pair whose closest point is inside its triangle, nor
-/// edge–edge pairs.
+/// of each vertex is never dropped but for the second rule, nor a pair whose closest point is
+/// inside its triangle, nor edge–edge pairs.
 pub fn closest_only(stencils: &mut Vec<Proximity>) {
     let vt = stencils
         .iter()
@@ -167,21 +178,32 @@ pub fn closest_only(stencils: &mut Vec<Proximity>) {
                 .count();
         for k in start..end {
             let t = &stencils[k];
-            // the vertices of t's feature (edge or vertex) that holds the closest point
-            let feature = (1..4).filter(|&j| t.weights[j] < 0.0);
-            if feature.clone().count() == 3 {
+            if feature(t).count() == 3 {
                 continue;
             }
             keep[k] = !(start..end).any(|m| {
                 let u = &stencils[m];
                 m != k
                     && (u.dist, m) < (t.dist, k)
-                    && feature
-                        .clone()
-                        .all(|j| u.particles[1..].contains(&t.particles[j]))
+                    && feature(t).all(|w| u.particles[1..].contains(&w))
             });
         }
         start = end;
+    }
+    // the vertex–vertex contacts that stay, as (vertex, the other vertex)
+    let at_vertex = |k: usize| {
+        let mut f = feature(&stencils[k]);
+        match (f.next(), f.next()) {
+            (Some(w), None) => Some((stencils[k].particles[0], w)),
+            _ => None,
+        }
+    };
+    let pairs: std::collections::HashSet<(u32, u32)> =
+        (0..vt).filter(|&k| keep[k]).filter_map(at_vertex).collect();
+    for k in 0..vt {
+        if let Some((v, w)) = at_vertex(k) {
+            keep[k] &= !(v > w && pairs.contains(&(w, v)));
+        }
     }
     let mut k = 0;
     stencils.retain(|_| {
@@ -314,6 +336,59 @@ mod tests {
                 (force - expected).length() < 1e-9 * expected.length(),
                 "at ({px}, {py}): {force:?} from {} stencils, expected {expected:?}",
                 mine.len()
+            );
+        }
+    }
+
+    /// A vertex of a triangle rising steeply from just above a vertex of a flat sheet: each
+    /// vertex is the other's closest point, and the two pairs (the top vertex with the sheet's
+    /// triangles, the sheet's vertex with the top triangle) are one contact, pushing the two
+    /// vertices apart by `k (η - g)`, not twice that.
+    #[test]
+    fn two_vertices_close_to_each_other_are_one_contact() {
+        use crate::collision::repulsion::{Penalty, repulsion};
+        let sheet = Mesh::grid([1.0, 1.0], [5, 5], Vec3::ZERO, Vec3::Z).unwrap();
+        let (mut tris, edges) = (sheet.triangles(), sheet.edges());
+        let (eta, g) = (0.05, 0.02);
+        let penalty = Penalty {
+            thickness: eta,
+            stiffness: 1000.0,
+            tangential: false,
+        };
+        let mut x = sheet.positions.clone();
+        let w = x.iter().position(|p| p.length() < 1e-12).unwrap() as u32;
+        let u = x.len() as u32;
+        x.extend([
+            Vec3::new(0.0, 0.0, g),
+            Vec3::new(0.3, 0.05, 0.5),
+            Vec3::new(0.05, 0.3, 0.5),
+        ]);
+        tris.push([u, u + 1, u + 2]);
+        let mut all_edges = edges.clone();
+        all_edges.extend([[u, u + 1], [u + 1, u + 2], [u, u + 2]]);
+        let c = candidates(&x, &x, &tris, &all_edges, eta);
+        let mut prox = proximities(&x, &tris, &all_edges, &c, eta);
+        closest_only(&mut prox);
+        let force = |i: u32| -> Vec3 {
+            prox.iter()
+                .map(|p| {
+                    let q = p.particles.map(|j| x[j as usize]);
+                    let r = repulsion(&q, &p.weights, &penalty, p.normal);
+                    (0..4)
+                        .filter(|&j| p.particles[j] == i)
+                        .map(|j| r.forces[j])
+                        .sum::<Vec3>()
+                })
+                .sum()
+        };
+        let expected = Vec3::Z * (penalty.stiffness * (eta - g));
+        for (i, sign) in [(u, 1.0), (w, -1.0)] {
+            let f = force(i);
+            assert!(
+                (f - expected * sign).length() < 1e-9 * expected.length(),
+                "vertex {i}: {f:?}, expected {:?} ({} stencils)",
+                expected * sign,
+                prox.len()
             );
         }
     }
