@@ -31,10 +31,10 @@ fn material() -> Material {
 /// free sheet resting on it with `velocity`, centred at `offset` from the incentre of the floor's
 /// first triangle. The floor is one 4 m quad (two triangles), so the free sheet stays more than a
 /// metre away from the floor's edges and vertices: its contacts are vertices over the interior
-/// of a triangle, with the triangle's normal. (Near the edges of a finer floor, a vertex is also
-/// within the thickness of the neighbouring triangle, whose closest point is on the shared edge:
-/// that contact's normal is oblique and the stiff implicit repulsion damps the motion along it,
-/// a drag of its own that would blur what friction does.)
+/// of a triangle, with the triangle's normal. (Over a finer floor the sheet also feels a drag of
+/// its own, from the contacts at its border and between nearly parallel edges, and from vertices
+/// that lose every contact for a step; README, "Known limitations". It would blur what friction
+/// does.)
 fn sheet_on_sheet(normal: Vec3, offset: Vec3, velocity: Vec3, mu: f64) -> Simulation {
     let floor = Mesh::grid([4.0, 4.0], [2, 2], Vec3::ZERO, normal).unwrap();
     let pins = (0..floor.positions.len() as u32).collect();
