@@ -224,6 +224,74 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// On two sheets, crumpled or flat, one over the other (their vertices one above the
+        /// other or not), [`closest_only`]
+        /// keeps a subset of the stencils and every edge–edge pair, and every vertex keeps a pair
+        /// as close as its closest: its own, or for a vertex–vertex contact the other vertex's.
+        #[test]
+        fn closest_only_keeps_every_vertex_s_closest_contact(
+            seed in any::<u64>(), amp in prop_oneof![Just(0.0), 0.0..0.03f64], gap in 0.0..0.06f64,
+            eta in 0.02..0.12f64, aligned in any::<bool>(),
+        ) {
+            let mut state = seed | 1;
+            let mut rnd = move || {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+            };
+            let a = Mesh::grid([1.0, 1.0], [6, 6], Vec3::ZERO, Vec3::Z).unwrap();
+            let shift = if aligned { Vec3::ZERO } else { Vec3::new(0.07, 0.03, 0.0) };
+            let b = Mesh::grid([0.6, 0.6], [4, 4], shift + Vec3::Z * gap, Vec3::Z).unwrap();
+            let n = a.positions.len() as u32;
+            let x: Vec<Vec3> = (a.positions.iter().chain(&b.positions))
+                .map(|p| *p + Vec3::new(rnd(), rnd(), rnd()) * amp)
+                .collect();
+            let mut tris = a.triangles();
+            tris.extend(b.triangles().iter().map(|t| t.map(|i| i + n)));
+            let mut edges = a.edges();
+            edges.extend(b.edges().iter().map(|e| e.map(|i| i + n)));
+            let c = candidates(&x, &x, &tris, &edges, eta);
+            let all = proximities(&x, &tris, &edges, &c, eta);
+            let mut kept = all.clone();
+            closest_only(&mut kept);
+            prop_assert!(kept.iter().all(|k| all.contains(k)));
+            let ee = |v: &[Proximity]| v.iter().filter(|p| p.kind == StencilKind::EdgeEdge).count();
+            prop_assert_eq!(ee(&kept), ee(&all));
+            let vt = |v: &[Proximity], i: u32| -> Vec<Proximity> {
+                v.iter()
+                    .filter(|p| p.kind == StencilKind::VertexTriangle && p.particles[0] == i)
+                    .copied()
+                    .collect()
+            };
+            let closest = |v: &[Proximity]| v.iter().map(|p| p.dist).fold(f64::INFINITY, f64::min);
+            for i in 0..x.len() as u32 {
+                let before = closest(&vt(&all, i));
+                if before.is_infinite() {
+                    continue;
+                }
+                if closest(&vt(&kept, i)) == before {
+                    continue;
+                }
+                // else its closest pair was a vertex–vertex contact, kept from the other side
+                let other = vt(&all, i).into_iter().find(|p| p.dist == before).map(|p| {
+                    let f: Vec<u32> = feature(&p).collect();
+                    f
+                });
+                let Some([w]) = other.as_deref() else {
+                    return Err(TestCaseError::fail(format!("vertex {i} lost its closest pair")));
+                };
+                let back = vt(&kept, *w)
+                    .into_iter()
+                    .any(|p| feature(&p).eq([i]) && (p.dist - before).abs() <= 1e-12 * eta);
+                prop_assert!(back, "vertex {} lost its contact with vertex {}", i, w);
+            }
+        }
+    }
+
+    proptest! {
         #![proptest_config(ProptestConfig::with_cases(256))]
 
         /// The ball test never drops a pair closer than the thickness, and does drop pairs
