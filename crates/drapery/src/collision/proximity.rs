@@ -227,9 +227,9 @@ mod tests {
         #![proptest_config(ProptestConfig::with_cases(64))]
 
         /// On two sheets, crumpled or flat, one over the other (their vertices one above the
-        /// other or not), [`closest_only`]
-        /// keeps a subset of the stencils and every edge–edge pair, and every vertex keeps a pair
-        /// as close as its closest: its own, or for a vertex–vertex contact the other vertex's.
+        /// other or not), [`closest_only`] keeps a subset of the stencils and every edge–edge
+        /// pair, and every vertex keeps a pair as close as its closest: its own, or for a
+        /// vertex–vertex contact the other vertex's.
         #[test]
         fn closest_only_keeps_every_vertex_s_closest_contact(
             seed in any::<u64>(), amp in prop_oneof![Just(0.0), 0.0..0.03f64], gap in 0.0..0.06f64,
