@@ -553,7 +553,7 @@ impl Grid {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::mesh::Mesh;
     use proptest::prelude::*;
@@ -586,7 +586,7 @@ mod tests {
     }
 
     /// Pseudo-random numbers without extra dependencies (deterministic per seed).
-    fn noise(seed: u64) -> impl FnMut() -> f64 {
+    pub(crate) fn noise(seed: u64) -> impl FnMut() -> f64 {
         let mut s = seed
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);

@@ -235,13 +235,7 @@ mod tests {
             seed in any::<u64>(), amp in prop_oneof![Just(0.0), 0.0..0.03f64], gap in 0.0..0.06f64,
             eta in 0.02..0.12f64, aligned in any::<bool>(),
         ) {
-            let mut state = seed | 1;
-            let mut rnd = move || {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-            };
+            let mut rnd = crate::collision::broad_phase::tests::noise(seed);
             let a = Mesh::grid([1.0, 1.0], [6, 6], Vec3::ZERO, Vec3::Z).unwrap();
             let shift = if aligned { Vec3::ZERO } else { Vec3::new(0.07, 0.03, 0.0) };
             let b = Mesh::grid([0.6, 0.6], [4, 4], shift + Vec3::Z * gap, Vec3::Z).unwrap();
