@@ -99,7 +99,7 @@ pub fn validate(args: ValidateArgs) -> Result<()> {
     ));
     let s = &scene.solver;
     out.push_str(&format!(
-        "solver: {}, tolerance {}, max_iterations {}, newton_iterations {}, gravity [{}, {}, {}] m/s²\n",
+        "solver: {}, tolerance {}, max_iterations {}, newton_iterations {} (at most {} where the linearization is far off), gravity [{}, {}, {}] m/s²\n",
         match s.linear_solver {
             LinearSolver::Pcg => "pcg",
             LinearSolver::Direct => "direct",
@@ -107,6 +107,7 @@ pub fn validate(args: ValidateArgs) -> Result<()> {
         s.tolerance,
         s.max_iterations,
         s.newton_iterations,
+        s.max_newton_iterations.max(s.newton_iterations),
         scene.gravity.x,
         scene.gravity.y,
         scene.gravity.z,

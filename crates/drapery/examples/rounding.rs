@@ -30,7 +30,7 @@ use drapery::animation::Motion;
 use drapery::collision::settings::CollisionSettings;
 use drapery::constraints::handles::HandleDesc;
 use drapery::model::{ClothModel, Shell, SpringKind};
-use drapery::presets::Preset;
+use drapery::presets::{Preset, jitter_direction};
 use drapery::{ClothDesc, LinearSolver, Material, Model, Simulation, SolverSettings, Vec3};
 
 fn main() -> drapery::Result<()> {
@@ -74,7 +74,10 @@ fn main() -> drapery::Result<()> {
             .positions()
             .iter()
             .enumerate()
-            .map(|(i, p)| *p + seed * direction(i as u64 + (1 << 40)) + pert * direction(i as u64))
+            .map(|(i, p)| {
+                *p + seed * jitter_direction(i as u64 + (1 << 40))
+                    + pert * jitter_direction(i as u64)
+            })
             .collect();
         sim.set_positions(&x)?;
         sims.push(sim);
@@ -213,18 +216,4 @@ fn largest_compression(m: &Model) -> f64 {
         .filter(|&k| s.kind[k] == SpringKind::Stretch)
         .map(|k| 1.0 - (x[s.i[k] as usize] - x[s.j[k] as usize]).length() / s.rest[k])
         .fold(0.0f64, f64::max)
-}
-
-/// A fixed unit direction per particle (splitmix64).
-fn direction(i: u64) -> Vec3 {
-    let mut z = i.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let mut next = || {
-        z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut y = z;
-        y = (y ^ (y >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        y = (y ^ (y >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        y ^= y >> 31;
-        (y >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
-    Vec3::new(next(), next(), next()).normalize()
 }

@@ -16,6 +16,7 @@
 //!
 //! [solver]                      # optional; defaults shown
 //! newton_iterations = 1
+//! max_newton_iterations = 3     # where the linearized step is far off (docs/MATH.md §10)
 //! tolerance = 1e-6
 //! max_iterations = 1000
 //! linear_solver = "pcg"         # or "direct"
@@ -159,6 +160,7 @@ struct SimulationTable {
 #[serde(deny_unknown_fields)]
 struct SolverTable {
     newton_iterations: Option<u32>,
+    max_newton_iterations: Option<u32>,
     tolerance: Option<f64>,
     max_iterations: Option<usize>,
     linear_solver: Option<SolverName>,
@@ -526,6 +528,7 @@ fn solver_settings(t: &SolverTable) -> SolverSettings {
     let d = SolverSettings::default();
     SolverSettings {
         newton_iterations: t.newton_iterations.unwrap_or(d.newton_iterations),
+        max_newton_iterations: t.max_newton_iterations.unwrap_or(d.max_newton_iterations),
         tolerance: t.tolerance.unwrap_or(d.tolerance),
         max_iterations: t.max_iterations.unwrap_or(d.max_iterations),
         linear_solver: match t.linear_solver {
@@ -821,6 +824,10 @@ pin = [0, 2]
             (
                 format!("{BASE}\n[solver]\nmax_iterations = 0\n"),
                 "solver.max_iterations",
+            ),
+            (
+                format!("{BASE}\n[solver]\nmax_newton_iterations = 0\n"),
+                "solver.max_newton_iterations",
             ),
             (
                 format!("{BASE}\n[solver]\nlinear_solver = \"lu\"\n"),

@@ -11,7 +11,7 @@
 //! | detect | [`detect`] | obstacle contact candidates, self-contact stencils |
 //! | linearize | [`linearize`] | forces, `A`, right-hand side (per Newton iteration) |
 //! | constrain, solve | [`solve`] | filter `S` and `z`, filtered PCG on the obstacle active set |
-//! | update | [`newton`] | new velocities and positions, line search with several iterations |
+//! | update | [`newton`] | new velocities and positions, line search with several iterations; where obstacle contact begins, more iterations while the linearization is far off |
 //! | friction | [`friction`] | cloth–cloth, then obstacle friction |
 //! | strain | [`strain`] | over-long edges of strain-limited cloths shortened (momentum kept) |
 //! | failsafe | [`failsafe`] | continuous collision detection: nothing crosses anything |
@@ -266,6 +266,13 @@ impl Simulation {
             ),
         };
         let newton = self.settings.newton_iterations;
+        // where obstacle contact begins, a step whose linearization is far off iterates up to
+        // this many times (MATH §10)
+        let most = match first_contact {
+            true => self.settings.max_newton_iterations.max(newton),
+            false => newton,
+        };
+        let mut limit = newton;
         let potential = Potential {
             t0: self.time,
             mass: &self.model.mass,
@@ -275,7 +282,8 @@ impl Simulation {
             v0: &start.v0,
             h,
         };
-        for it in 0..newton {
+        let mut it = 0;
+        while it < limit {
             timed(&mut report.stages.linearize, || {
                 let iterate = Iterate {
                     t1: self.time + h,
@@ -316,9 +324,20 @@ impl Simulation {
             )
             .map_err(|e| at.fail(e))?;
             report.newton_iterations = it + 1;
+            // the last iteration so far: one more if its linearization is far off
+            if it + 1 == limit && limit < most {
+                let e = timed(&mut report.stages.update, || {
+                    let springs = self.model.springs();
+                    newton::linearization_error(springs, &x, &start.x0, &v, &work.dv, h)
+                });
+                if e > newton::RELINEARIZE_STRAIN {
+                    limit += 1;
+                }
+            }
             let outcome = timed(&mut report.stages.update, || {
-                newton::update(&potential, &mut x, &mut v, &work.dv, it, newton, gh)
+                newton::update(&potential, &mut x, &mut v, &work.dv, it, limit, gh)
             });
+            it += 1;
             match outcome {
                 Outcome::Continue => {}
                 Outcome::Converged => break,

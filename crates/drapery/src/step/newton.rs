@@ -5,9 +5,62 @@
 //! `Φ(v) = ½ (v - v₀)ᵀ M (v - v₀) + E(x₀ + h v) + h Ψ(x₀ + h v, v)` (`Ψ` the dissipation
 //! potential of damping and drag; docs/MATH.md §10). The first iteration is the linearized step;
 //! each one halves its step along the solved direction until `Φ` does not increase.
+//!
+//! Where obstacle contact begins, a step whose linearized solve is far off
+//! ([`linearization_error`] over [`RELINEARIZE_STRAIN`]) iterates all the same, up to
+//! `max_newton_iterations`, until the error of an iteration's own linearization is under it
+//! (docs/MATH.md §10, "Where the linearization is far off").
 
 use crate::forces::{Force, State};
 use crate::math::Vec3;
+use crate::model::{SpringKind, Springs};
+use rayon::prelude::*;
+
+/// The largest [`linearization_error`] a step takes as it is; above it the step iterates
+/// (docs/MATH.md §10). A spring turning by `θ` within a step has the error `1 - cos θ`, so this
+/// is a turn of 46° within one step; a step that lands a sheet edge-first on the ground can
+/// have errors of 3 to 8 (a spring's length off by three to eight rest lengths).
+pub(crate) const RELINEARIZE_STRAIN: f64 = 0.3;
+
+/// Springs per task when measuring the linearization error.
+const SPRINGS: usize = 4096;
+
+/// How far the step's linear model is off: over the stretch springs (mesh edges), the largest
+/// difference between a spring's length after the full change `dv` and the length the
+/// linearization predicts for it, as a share of its rest length. The linearization point is
+/// `x` (the iterate, `x₀` at the first iteration); the full change ends at
+/// `x₀ + h (v + dv)`. The prediction is first order: `ℓ + n·δ` with `n` the spring's direction
+/// at `x` and `δ` the change of its vector, so a spring that turns without stretching, or a
+/// particle pushed along the plane across its spring, has an error (docs/MATH.md §10). The
+/// largest value does not depend on the order of the springs, so neither on the threads.
+pub(crate) fn linearization_error(
+    springs: &Springs,
+    x: &[Vec3],
+    x0: &[Vec3],
+    v: &[Vec3],
+    dv: &[Vec3],
+    h: f64,
+) -> f64 {
+    let one = |k: usize| -> f64 {
+        if springs.kind[k] != SpringKind::Stretch {
+            return 0.0;
+        }
+        let (i, j) = (springs.i[k] as usize, springs.j[k] as usize);
+        let d = x[i] - x[j];
+        let end = x0[i] - x0[j] + h * (v[i] + dv[i] - v[j] - dv[j]);
+        let l = d.length();
+        if !(l > 0.0) {
+            return 0.0;
+        }
+        let predicted = l + d.dot(end - d) / l;
+        (end.length() - predicted).abs() / springs.rest[k]
+    };
+    (0..springs.len())
+        .into_par_iter()
+        .with_min_len(SPRINGS)
+        .map(one)
+        .reduce(|| 0.0, f64::max)
+}
 
 /// What the update found.
 pub(crate) enum Outcome {
@@ -188,6 +241,62 @@ mod tests {
             update(&p, &mut x, &mut v, &bad, 1, 3, 0.1),
             Outcome::NonFinite(2)
         ));
+    }
+
+    /// One stretch spring from particle 0 at the origin to particle 1 at `(L, 0, 0)`, moved in
+    /// one step of `h = 1` to `b`, particle 0 staying.
+    fn error_of_a_spring_moved_to(b: Vec3) -> f64 {
+        let mut springs = Springs::default();
+        springs.push(1, 0, 0.5, 1.0, 0.0, SpringKind::Stretch);
+        let x = [Vec3::ZERO, Vec3::X * 0.5];
+        let v = [Vec3::ZERO; 2];
+        let dv = [Vec3::ZERO, b - x[1]];
+        linearization_error(&springs, &x, &x, &v, &dv, 1.0)
+    }
+
+    #[test]
+    fn the_linearization_error_of_a_spring_is_its_second_order_change_of_length() {
+        let l = 0.5;
+        // stretched along itself: the linear model is exact
+        assert!(error_of_a_spring_moved_to(Vec3::X * 0.8).abs() < 1e-15);
+        // turned by θ about particle 0: the model predicts the length l cos θ, the spring
+        // keeps l, so the error is 1 - cos θ
+        for theta in [0.1f64, 0.8, 1.5] {
+            let b = l * Vec3::new(theta.cos(), theta.sin(), 0.0);
+            let e = error_of_a_spring_moved_to(b);
+            assert!((e - (1.0 - theta.cos())).abs() < 1e-14, "{theta}: {e}");
+        }
+        // the end pushed sideways by s: the model predicts no change, the spring grows to
+        // √(l² + s²)
+        let s = 2.0;
+        let e = error_of_a_spring_moved_to(Vec3::new(l, 0.0, s));
+        assert!((e - ((l * l + s * s).sqrt() - l) / l).abs() < 1e-14, "{e}");
+        // bend and shear springs do not count
+        let mut springs = Springs::default();
+        springs.push(1, 0, 0.5, 1.0, 0.0, SpringKind::Bend);
+        springs.push(1, 0, 0.5, 1.0, 0.0, SpringKind::Shear);
+        let x = [Vec3::ZERO, Vec3::X * 0.5];
+        let dv = [Vec3::ZERO, Vec3::Z * 3.0];
+        assert_eq!(
+            linearization_error(&springs, &x, &x, &[Vec3::ZERO; 2], &dv, 1.0),
+            0.0
+        );
+    }
+
+    #[test]
+    fn the_linearization_error_is_measured_from_the_iterate() {
+        // a later iteration linearizes at x = x₀ + h v: a spring already turned there and
+        // changed no further has no error, though it turned since the start of the step
+        let mut springs = Springs::default();
+        springs.push(1, 0, 1.0, 1.0, 0.0, SpringKind::Stretch);
+        let x0 = [Vec3::ZERO, Vec3::X];
+        let v = [Vec3::ZERO, Vec3::Y - Vec3::X];
+        let x = [Vec3::ZERO, Vec3::Y];
+        let dv = [Vec3::ZERO; 2];
+        assert_eq!(linearization_error(&springs, &x, &x0, &v, &dv, 1.0), 0.0);
+        // from x₀ the same end has the error of a quarter turn
+        let e = linearization_error(&springs, &x0, &x0, &[Vec3::ZERO; 2], &v, 1.0);
+        assert!((e - 1.0).abs() < 1e-15, "{e}");
     }
 
     #[test]

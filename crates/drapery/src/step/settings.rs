@@ -32,6 +32,12 @@ pub const IMPACT_SHARE: f64 = 3e-3;
 pub struct SolverSettings {
     /// Newton iterations per step; 1 is the seeds' linearized step (default: 1).
     pub newton_iterations: u32,
+    /// Newton iterations at most in a step where obstacle contact begins and whose
+    /// linearization is far off (default: 3): after such a step's last iteration, one more
+    /// follows while a stretch spring's length after the solved change differs from the linear
+    /// model's prediction by more than 30 % of its rest length (docs/MATH.md §10). 1, or at
+    /// most `newton_iterations`, never adds one.
+    pub max_newton_iterations: u32,
     /// PCG relative residual `‖r‖/‖b‖` (default: 1e-6); a step where obstacle contact begins,
     /// or an impact ([`IMPACT_SHARE`]), uses at most [`FIRST_CONTACT_TOLERANCE`].
     pub tolerance: f64,
@@ -50,6 +56,7 @@ impl Default for SolverSettings {
     fn default() -> Self {
         SolverSettings {
             newton_iterations: 1,
+            max_newton_iterations: 3,
             tolerance: 1e-6,
             max_iterations: 1000,
             linear_solver: LinearSolver::Pcg,
@@ -66,6 +73,12 @@ impl SolverSettings {
             return Err(Error::field(
                 "solver.newton_iterations",
                 format!("must be at least 1, got {}", self.newton_iterations),
+            ));
+        }
+        if self.max_newton_iterations < 1 {
+            return Err(Error::field(
+                "solver.max_newton_iterations",
+                format!("must be at least 1, got {}", self.max_newton_iterations),
             ));
         }
         if !(self.tolerance > 0.0 && self.tolerance < 1.0) {
