@@ -484,9 +484,12 @@ mod tests {
         }
     }
 
-    /// The PCG tolerances of issue 18's rounding test: 14 from 0.9e-3 to 1.2e-3.
-    fn rounding_tolerances() -> impl Iterator<Item = f64> {
-        (0..14).map(|k| 0.9e-3 + k as f64 * 0.3e-3 / 13.0)
+    /// Issue 18's rounding runs as (PCG tolerance, move of the start in m): 14 tolerances from
+    /// 0.9e-3 to 1.2e-3, then 1e-3 with the start moved by ±1e-9 m.
+    fn rounding_runs() -> Vec<(f64, f64)> {
+        ((0..14).map(|k| (0.9e-3 + k as f64 * 0.3e-3 / 13.0, 0.0)))
+            .chain([(1.0e-3, 1e-9), (1.0e-3, -1e-9)])
+            .collect()
     }
 
     /// Mean self-contact stencils and CCD hits per step over the pile's first second (60 steps
@@ -516,12 +519,13 @@ mod tests {
     /// 2.2 times the median's stencils.
     #[test]
     fn pile_contact_work_does_not_depend_on_rounding() {
-        let runs: Vec<(f64, f64)> = (rounding_tolerances().map(|t| (t, 0.0)))
-            .chain([(1.0e-3, 1e-9), (1.0e-3, -1e-9)])
-            .collect();
+        let runs = rounding_runs();
         let means: Vec<[f64; 2]> = (runs.par_iter())
             .map(|&(tolerance, moved)| pile_rounding_run(128, tolerance, moved))
             .collect();
+        // The fail-safe has almost nothing left to stop on the pile (0 to 0.47 CCD hits per
+        // step): a run may then have up to one hit per step more than twice the median, not
+        // one whole hit more than zero.
         for k in 0..2 {
             let mut m: Vec<f64> = means.iter().map(|r| r[k]).collect();
             m.sort_by(f64::total_cmp);
@@ -545,9 +549,7 @@ mod tests {
     /// over the first second in every run; now each run makes under 20, and no CCD hit.
     #[test]
     fn pile_64_lands_without_folding_whatever_the_rounding() {
-        let runs: Vec<(f64, f64)> = (rounding_tolerances().map(|t| (t, 0.0)))
-            .chain([(1.0e-3, 1e-9), (1.0e-3, -1e-9)])
-            .collect();
+        let runs = rounding_runs();
         let means: Vec<[f64; 2]> = (runs.par_iter())
             .map(|&(tolerance, moved)| pile_rounding_run(64, tolerance, moved))
             .collect();
@@ -556,15 +558,15 @@ mod tests {
         }
     }
 
-    /// pile-`n`'s self-contact stencils over steps 10 to 14 of h = 1/60 s (its ground contact
+    /// pile-128's self-contact stencils over steps 10 to 14 of h = 1/60 s (its ground contact
     /// and the folding after it) with `linear_solver` at the default tolerance.
-    fn pile_contact_work(n: usize, linear_solver: crate::LinearSolver) -> f64 {
+    fn pile_contact_work(linear_solver: crate::LinearSolver) -> f64 {
         let settings = SolverSettings {
             max_iterations: 20_000,
             linear_solver,
             ..Default::default()
         };
-        let mut sim = Simulation::new(Preset::Pile.model(n).unwrap(), settings).unwrap();
+        let mut sim = Simulation::new(Preset::Pile.model(128).unwrap(), settings).unwrap();
         let counts: Vec<usize> = (0..15)
             .map(|_| sim.step(1.0 / 60.0).unwrap().self_contacts)
             .collect();
@@ -589,8 +591,8 @@ mod tests {
     /// that.
     #[test]
     fn pile_contact_work_at_the_default_tolerance_is_the_exact_solves() {
-        let exact = pile_contact_work(128, crate::LinearSolver::Direct);
-        let pcg = pile_contact_work(128, crate::LinearSolver::Pcg);
+        let exact = pile_contact_work(crate::LinearSolver::Direct);
+        let pcg = pile_contact_work(crate::LinearSolver::Pcg);
         assert!(exact > 300.0, "the pile folds on contact: {exact}");
         assert!(
             (pcg - exact).abs() <= 0.2 * exact,
