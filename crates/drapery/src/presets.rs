@@ -510,6 +510,15 @@ mod tests {
         sum
     }
 
+    /// [`rounding_runs`] and each one's [`pile_rounding_run`] at `n × n` vertices.
+    fn pile_rounding_runs(n: usize) -> (Vec<(f64, f64)>, Vec<[f64; 2]>) {
+        let runs = rounding_runs();
+        let means = (runs.par_iter())
+            .map(|&(tolerance, moved)| pile_rounding_run(n, tolerance, moved))
+            .collect();
+        (runs, means)
+    }
+
     /// Issue 18, rounding amplification (docs/ROUNDING.md, forty-second session): pile-128's
     /// first second at 14 PCG tolerances from 0.9e-3 to 1.2e-3, and at 1e-3 with its initial
     /// positions moved by ±1e-9 m. Runs that differ only by rounding must do the same amount of
@@ -519,10 +528,7 @@ mod tests {
     /// 2.2 times the median's stencils.
     #[test]
     fn pile_contact_work_does_not_depend_on_rounding() {
-        let runs = rounding_runs();
-        let means: Vec<[f64; 2]> = (runs.par_iter())
-            .map(|&(tolerance, moved)| pile_rounding_run(128, tolerance, moved))
-            .collect();
+        let (runs, means) = pile_rounding_runs(128);
         // The fail-safe has almost nothing left to stop on the pile (0 to 0.47 CCD hits per
         // step): a run may then have up to one hit per step more than twice the median, not
         // one whole hit more than zero.
@@ -549,10 +555,7 @@ mod tests {
     /// over the first second in every run; now each run makes under 20, and no CCD hit.
     #[test]
     fn pile_64_lands_without_folding_whatever_the_rounding() {
-        let runs = rounding_runs();
-        let means: Vec<[f64; 2]> = (runs.par_iter())
-            .map(|&(tolerance, moved)| pile_rounding_run(64, tolerance, moved))
-            .collect();
+        let (runs, means) = pile_rounding_runs(64);
         for (r, run) in means.iter().zip(&runs) {
             assert!(r[0] < 20.0 && r[1] == 0.0, "{r:?} at {run:?}");
         }
