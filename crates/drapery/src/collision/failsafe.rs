@@ -152,15 +152,16 @@ fn impact(ids: [u32; 4], vt: bool, x0: &[Vec3], x1: &[Vec3], tol: f64) -> Option
 struct Groups {
     /// Each vertex's parent; a root is its own. A group's root is its leader.
     lead: Vec<u32>,
-    /// Some vertex follows another.
-    any: bool,
+    /// The vertices that follow another, in the order they joined (each once: only a root
+    /// joins, and it never becomes a root again).
+    followers: Vec<u32>,
 }
 
 impl Groups {
     fn new(n: usize) -> Groups {
         Groups {
             lead: (0..n as u32).collect(),
-            any: false,
+            followers: Vec::new(),
         }
     }
 
@@ -202,10 +203,10 @@ impl Groups {
         for &r in &roots {
             if r != leader && !pinned[r] && self.lead[r] as usize != leader {
                 self.lead[r] = leader as u32;
+                self.followers.push(r as u32);
                 joined = true;
             }
         }
-        self.any |= joined;
         joined
     }
 
@@ -219,17 +220,13 @@ impl Groups {
         moved: &mut [bool],
         clear: &dyn Fn(usize, Vec3) -> bool,
     ) {
-        if !self.any {
-            return;
-        }
-        for i in 0..self.lead.len() {
+        for k in 0..self.followers.len() {
+            let i = self.followers[k] as usize;
             let r = self.root(i);
-            if r != i {
-                let p = x0[i] + (ye[r] - x0[r]);
-                if p != ye[i] && clear(i, p) {
-                    ye[i] = p;
-                    moved[i] = true;
-                }
+            let p = x0[i] + (ye[r] - x0[r]);
+            if p != ye[i] && clear(i, p) {
+                ye[i] = p;
+                moved[i] = true;
             }
         }
     }
