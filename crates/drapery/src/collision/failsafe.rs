@@ -144,11 +144,12 @@ fn impact(ids: [u32; 4], vt: bool, x0: &[Vec3], x1: &[Vec3], tol: f64) -> Option
     None
 }
 
-/// Cloth vertices that move as one group with the displacement of its leader, a pinned or
-/// carried vertex (a union–find over the cloth's vertices). A cloth pair can still collide with
-/// all its vertices back at their start when one of them moves anyway: pinned, or carried by an
-/// obstacle (cloth pressed into a crease of a moving body). Moving the pair's vertices by one
-/// displacement keeps their distance, so the pair cannot touch.
+/// Cloth vertices that move as one group with the displacement of its leader, a vertex carried
+/// by an obstacle (a union–find over the cloth's vertices). A cloth pair can still collide with
+/// all its vertices back at their start when one of them is carried (cloth pressed by a moving
+/// body into other cloth). Moving the pair's vertices by one displacement keeps their distance,
+/// so the pair cannot touch. (Pairs with a pinned vertex are left to the partial zones' second
+/// try.)
 struct Groups {
     /// Each vertex's parent; a root is its own. A group's root is its leader.
     lead: Vec<u32>,
@@ -175,10 +176,10 @@ impl Groups {
     }
 
     /// Joins the groups of the cloth vertices of `ids` (particles from `lead.len()` on are
-    /// obstacle vertices) under one leader: the lowest pinned root, else the lowest carried
-    /// one; pinned roots follow no one. False, joining nothing, when there is no such root,
-    /// they are one group already, or the leader's displacement (`ye - x0`) would take one of
-    /// the pair's vertices into an analytic obstacle (`clear` false for its new path).
+    /// obstacle vertices) under one leader, the lowest carried root. False, joining nothing,
+    /// when there is none, one of the vertices is pinned, they are one group already, or the
+    /// leader's displacement (`ye - x0`) would take one of them into an analytic obstacle
+    /// (`clear` false for its new path).
     fn join(
         &mut self,
         ids: &[u32; 4],
@@ -188,20 +189,21 @@ impl Groups {
     ) -> bool {
         let n = self.lead.len();
         let cloth = || (ids.iter().map(|&i| i as usize)).filter(|&i| i < n);
+        if cloth().any(|i| pinned[i]) {
+            return false;
+        }
         let roots: Vec<usize> = cloth().map(|i| self.root(i)).collect();
-        let lowest =
-            |keep: &dyn Fn(usize) -> bool| roots.iter().copied().filter(|&r| keep(r)).min();
-        let Some(leader) = lowest(&|r| pinned[r]).or_else(|| lowest(&|r| carried[r].is_some()))
-        else {
+        let carried_roots = roots.iter().copied().filter(|&r| carried[r].is_some());
+        let Some(leader) = carried_roots.min() else {
             return false;
         };
         let d = ye[leader] - x0[leader];
-        if !cloth().all(|i| pinned[i] || clear(i, x0[i] + d)) {
+        if !cloth().all(|i| clear(i, x0[i] + d)) {
             return false;
         }
         let mut joined = false;
         for &r in &roots {
-            if r != leader && !pinned[r] && self.lead[r] as usize != leader {
+            if r != leader && self.lead[r] as usize != leader {
                 self.lead[r] = leader as u32;
                 self.followers.push(r as u32);
                 joined = true;
@@ -556,8 +558,8 @@ pub fn failsafe(
                     .all(|&i| frac[i as usize] == 0.0 || pinned[i as usize]);
                 if all_back && obstacle.is_none() {
                     // a cloth pair back at its start that still collides: a vertex of it is
-                    // pinned or carried by an obstacle, so it moves as one group with that
-                    // vertex's displacement
+                    // carried by an obstacle, so it moves as one group with that vertex's
+                    // displacement
                     let at = (x0, &ye[..]);
                     if groups.join(ids, (pinned, &carried), at, &clear) {
                         ids.iter().for_each(|&i| moved[i as usize] = true);
