@@ -557,9 +557,8 @@ pub fn failsafe(
                     .filter(|&&i| is_cloth(i))
                     .all(|&i| frac[i as usize] == 0.0 || pinned[i as usize]);
                 if all_back && obstacle.is_none() {
-                    // a cloth pair back at its start that still collides: a vertex of it is
-                    // carried by an obstacle, so it moves as one group with that vertex's
-                    // displacement
+                    // a cloth pair back at its start that still collides has a vertex that
+                    // moves anyway; a carried one takes the pair along as one group (`Groups`)
                     let at = (x0, &ye[..]);
                     if groups.join(ids, (pinned, &carried), at, &clear) {
                         ids.iter().for_each(|&i| moved[i as usize] = true);
