@@ -44,13 +44,7 @@ pub fn sewn_intersecting_pairs(
 ) -> Vec<[u32; 2]> {
     // each vertex's representative: the smallest vertex it is sewn to, through any chain
     let mut rep: Vec<u32> = (0..x.len() as u32).collect();
-    fn root(rep: &mut [u32], mut v: u32) -> u32 {
-        while rep[v as usize] != v {
-            rep[v as usize] = rep[rep[v as usize] as usize];
-            v = rep[v as usize];
-        }
-        v
-    }
+    use super::union_find::root;
     for &[a, b] in stitches {
         let (ra, rb) = (root(&mut rep, a), root(&mut rep, b));
         rep[ra.max(rb) as usize] = ra.min(rb);

@@ -166,13 +166,8 @@ impl Groups {
         }
     }
 
-    fn root(&mut self, mut i: usize) -> usize {
-        while self.lead[i] as usize != i {
-            let up = self.lead[self.lead[i] as usize];
-            self.lead[i] = up;
-            i = up as usize;
-        }
-        i
+    fn root(&mut self, i: usize) -> usize {
+        super::union_find::root(&mut self.lead, i as u32) as usize
     }
 
     /// Joins the groups of the cloth vertices of `ids` (particles from `lead.len()` on are

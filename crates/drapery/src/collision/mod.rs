@@ -39,4 +39,5 @@ pub mod seams;
 pub mod settings;
 mod sweep;
 pub mod tessellate;
+mod union_find;
 mod zones;

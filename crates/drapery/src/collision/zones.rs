@@ -37,13 +37,8 @@ impl Zones {
         }
     }
 
-    fn root(&mut self, mut i: u32) -> u32 {
-        while self.parent[i as usize] != i {
-            let p = self.parent[i as usize];
-            self.parent[i as usize] = self.parent[p as usize];
-            i = p;
-        }
-        i
+    fn root(&mut self, i: u32) -> u32 {
+        super::union_find::root(&mut self.parent, i)
     }
 
     /// Merges the vertices of each colliding pair into one zone, then sets every zone vertex's
