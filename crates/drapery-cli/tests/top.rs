@@ -122,8 +122,7 @@ fn top_is_sewn_around_the_torso_and_turns_with_the_body() {
 #[test]
 fn the_top_at_finer_edges_runs_past_a_vertex_carried_into_its_cloth() {
     let dir = examples();
-    let text = std::fs::read_to_string(dir.join("top.toml")).unwrap();
-    let mut scene = text.clone();
+    let mut scene = std::fs::read_to_string(dir.join("top.toml")).unwrap();
     for (from, to) in [
         ("edge_length = 0.03 ", "edge_length = 0.015 ".to_string()),
         ("duration = 2.0", "duration = 0.1".to_string()),
@@ -137,12 +136,7 @@ fn the_top_at_finer_edges_runs_past_a_vertex_carried_into_its_cloth() {
     let path = tmp.path().join("top_fine.toml");
     std::fs::write(&path, scene).unwrap();
     let out = tmp.path().join("out");
-    let r = common::drapery(&[
-        "run".as_ref(),
-        path.as_os_str(),
-        "--output".as_ref(),
-        out.as_os_str(),
-    ]);
+    let r = common::drapery(&common::run_args(&path, &out, &[]));
     assert_eq!(r.code, Some(0), "{}", r.stderr);
     let c = common::drapery(&[
         "check".as_ref(),
