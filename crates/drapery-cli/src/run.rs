@@ -263,13 +263,21 @@ pub fn run(args: RunArgs) -> Result<()> {
         // `[simulation] preroll`: settle with everything held at its pose at t = 0; frame 0 is
         // the settled state (a resumed run restores its snapshot instead); cloth starting
         // inside colliders or crossed is untangled there
-        let before = (scene.preroll_steps() > 0).then(|| sim.tangled());
+        // the scene's own start (its close pairs), then frame 0's facts, each from one search
+        // for what is tangled
+        let fresh = (scene.preroll_steps() > 0)
+            .then(|| sim.start_check())
+            .flatten();
         sim.preroll(scene.preroll_steps(), scene.step_size())
             .with_context(|| format!("{}: pre-roll", args.scene.display()))?;
-        // frame 0's facts, from one search for what is tangled
-        start_check = sim.start_check();
+        start_check = sim.start_check().map(|mut c| {
+            if let Some(f) = fresh {
+                c.close_pairs = f.close_pairs;
+            }
+            c
+        });
         let now = start_check.map(|c| c.tangled).unwrap_or_default();
-        let before = before.unwrap_or(now);
+        let before = fresh.map_or(now, |c| c.tangled);
         untangling = (before != drapery::Tangled::default()).then_some((before, now));
     }
     let (first, history) = match begin {

@@ -7,13 +7,13 @@
 //! [`ObjWriter`], PLY by [`write_ply`], and a sample appended to each cloth's point cache
 //! `<cloth name>.pc2` by [`Pc2Writer`]. The files are byte for byte the CLI's.
 
-use drapery::Simulation;
 use drapery::io::frames::frame_path;
 use drapery::io::obj::ObjWriter;
 use drapery::io::pc2::Pc2Writer;
 use drapery::io::ply::write_ply;
 use drapery::model::ClothInfo;
 use drapery::scene::Scene;
+use drapery::{Simulation, StartCheck};
 use std::path::{Path, PathBuf};
 
 /// A per-frame output format.
@@ -148,6 +148,8 @@ fn pc2_caches(dir: &Path, cloths: &[ClothInfo]) -> drapery::Result<Vec<Pc2Writer
 /// [`FrameRun::next_frame`].
 pub struct FrameRun {
     sim: Simulation,
+    /// The check of the scene's start, before the pre-roll.
+    fresh: Option<StartCheck>,
     files: FrameFiles,
     frames: usize,
     done: usize,
@@ -159,7 +161,12 @@ impl FrameRun {
     /// Builds the simulation, creates `dir` (existing frame files of the same names are
     /// replaced) and writes frame 0.
     pub fn start(scene: &Scene, dir: &Path, formats: &[FrameFormat]) -> Result<FrameRun, RunError> {
-        let sim = scene.start().map_err(RunError::Build)?;
+        // the scene's own start check (its close pairs), before the pre-roll settles it
+        let mut sim = scene.build().map_err(RunError::Build)?;
+        let fresh = (scene.preroll_steps() > 0)
+            .then(|| sim.start_check())
+            .flatten();
+        (sim.preroll(scene.preroll_steps(), scene.step_size())).map_err(RunError::Build)?;
         std::fs::create_dir_all(dir)
             .map_err(|e| RunError::Write(drapery::Error::io(dir.display(), e)))?;
         let cloths = sim.model().cloths().to_vec();
@@ -179,6 +186,7 @@ impl FrameRun {
         files.write(0, sim.positions()).map_err(RunError::Write)?;
         Ok(FrameRun {
             sim,
+            fresh,
             files,
             frames: scene.frame_count(),
             done: 0,
@@ -210,6 +218,17 @@ impl FrameRun {
     /// Frames after frame 0 of the whole run.
     pub fn frame_count(&self) -> usize {
         self.frames
+    }
+
+    /// What to warn of at frame 0 ([`Simulation::start_check`] there), with the close pairs of
+    /// the scene's start (before the pre-roll, where the cloth had not yet settled into
+    /// contact).
+    pub fn start_check(&self) -> Option<StartCheck> {
+        let mut c = self.sim.start_check()?;
+        if let Some(f) = self.fresh.filter(|_| c.settled) {
+            c.close_pairs = f.close_pairs;
+        }
+        Some(c)
     }
 
     /// The simulation, at the last frame written.

@@ -85,7 +85,7 @@ pub fn run(
         }
     };
     let path = s.path.display().to_string();
-    let checked = py.detach(|| in_pool(&pool, || frames.simulation().start_check()));
+    let checked = py.detach(|| in_pool(&pool, || frames.start_check()));
     for w in checked.map(|c| c.warnings()).unwrap_or_default() {
         // (the texts hold no NUL byte, but the path might)
         let text =

@@ -235,8 +235,10 @@ impl PySimulation {
 
     /// What `drapery run` (and `drapery.run`) would warn of, were a run to start from the
     /// current state: intersections the steps will not untangle (pinned or handle vertices
-    /// inside a collider, crossings without self-collision) and cloth pairs closer than
-    /// collision.thickness; one text per problem, `[]` for a clean start or without collisions.
+    /// inside a collider, crossings without self-collision; after steps, such as the pre-roll,
+    /// also crossings the steps made, those by a seam told apart) and, before any step, cloth
+    /// pairs closer than collision.thickness (after steps those are contact); one text per
+    /// problem, `[]` for a clean start or without collisions.
     #[getter]
     fn start_warnings(&self) -> Vec<String> {
         (self.sim.start_check())

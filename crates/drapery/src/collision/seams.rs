@@ -89,6 +89,11 @@ impl Seams {
         self.pairs.is_empty()
     }
 
+    /// Whether particle `p` lies in some neighbourhood.
+    pub fn holds(&self, p: u32) -> bool {
+        !self.range(p).is_empty()
+    }
+
     /// The range of `pairs` and `sides` for particle `p` (empty beyond the cloth).
     fn range(&self, p: u32) -> std::ops::Range<usize> {
         match self.ptr.get(p as usize + 1) {

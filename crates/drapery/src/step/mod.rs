@@ -649,16 +649,30 @@ impl Simulation {
         let tangles = (self.tangles).or_find(&self.model, &self.triangles, self.time, &mut fresh);
         // tangles found now, with self-collision, list the intersecting pairs the checker counts
         // (the same search); found at an earlier step, they are what is left of those
-        let intersecting_pairs = match !self.tangles.found && c.self_collision {
-            true => tangles.crossings.len(),
-            false => self.self_intersections(),
+        // after steps (a pre-roll) the crossings are listed again, to tell those by a seam
+        let settled = self.tangles.found;
+        let (intersecting_pairs, by_seam) = match settled || !c.self_collision {
+            false => (tangles.crossings.len(), 0),
+            true => {
+                let pairs = self.sewn_intersecting_pairs();
+                let seam = |t: u32| {
+                    self.triangles[t as usize]
+                        .iter()
+                        .any(|&p| self.seams.holds(p))
+                };
+                let by_seam = pairs.iter().filter(|&&[a, b]| seam(a) || seam(b)).count();
+                (pairs.len(), if settled { by_seam } else { 0 })
+            }
         };
         Some(StartCheck {
             intersecting_pairs,
             inside: self.penetrations(),
             tangled: tangles.counts(),
-            close_pairs: (c.self_collision).then(|| self.close_pairs_with(tangles, c.thickness)),
+            close_pairs: (c.self_collision && !settled)
+                .then(|| self.close_pairs_with(tangles, c.thickness)),
             thickness: c.thickness,
+            settled,
+            by_seam,
         })
     }
 
@@ -671,9 +685,14 @@ impl Simulation {
 
     /// The first count of [`Simulation::intersections`].
     fn self_intersections(&self) -> usize {
-        // the two ends of a stitched pair count as one vertex (a closed seam's sides touch)
+        self.sewn_intersecting_pairs().len()
+    }
+
+    /// The intersecting cloth triangle pairs `drapery check` counts: the two ends of a stitched
+    /// pair count as one vertex (a closed seam's sides touch).
+    fn sewn_intersecting_pairs(&self) -> Vec<[u32; 2]> {
         let sewn: Vec<[u32; 2]> = self.model.stitches.iter().map(|s| [s.a, s.b]).collect();
-        crate::collision::check::count_sewn_intersections(&self.model.x, &self.triangles, &sewn)
+        crate::collision::check::sewn_intersecting_pairs(&self.model.x, &self.triangles, &sewn)
     }
 
     /// The second count of [`Simulation::intersections`].

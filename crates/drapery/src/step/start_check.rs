@@ -16,10 +16,19 @@ pub struct StartCheck {
     /// What the first steps untangle ([`crate::Simulation::tangled`]).
     pub tangled: Tangled,
     /// Cloth pairs closer than the thickness and the distance of the closest
-    /// ([`crate::Simulation::close_pairs`]); `None` without self-collision.
+    /// ([`crate::Simulation::close_pairs`]); `None` without self-collision, and after steps
+    /// (`settled`): cloth that settled in contact lies within the thickness, which is no fault
+    /// of the scene. A front end that pre-rolls takes them from the check before the pre-roll.
     pub close_pairs: Option<(usize, f64)>,
     /// `collision.thickness`, m.
     pub thickness: f64,
+    /// Whether the state comes from steps (a pre-roll, or a restored run's) rather than from
+    /// the scene: its intersections were then made by the steps, not placed by the scene.
+    pub settled: bool,
+    /// After steps, how many of `intersecting_pairs` have a triangle with a vertex in a
+    /// stitched neighbourhood ([`crate::collision::seams::Seams`]), which repulsion and the
+    /// fail-safe let through so that the seam can close; 0 before any step.
+    pub by_seam: usize,
 }
 
 impl StartCheck {
@@ -33,10 +42,27 @@ impl StartCheck {
     /// scene's name, which the front end adds.
     pub fn warnings(&self) -> Vec<String> {
         let mut out = Vec::new();
-        if self.intersects_untreated() {
+        if self.intersects_untreated() && !self.settled {
             out.push(format!(
                 "frame 0 intersects ({} intersecting cloth triangle pairs, {} vertices inside colliders), not all of it being untangled (pinned or handle vertices inside a collider, or crossings without self_collision)",
                 self.intersecting_pairs, self.inside
+            ));
+        } else if self.intersects_untreated() {
+            let mut why = Vec::new();
+            if self.by_seam > 0 {
+                why.push(format!("{} of the pairs lie by a seam: its neighbourhood is let through itself so that it can close, and it closed crossed (for a garment, try another edge_length)", self.by_seam));
+            }
+            if self.intersecting_pairs > self.tangled.crossings + self.by_seam {
+                why.push("cloth crossed in the steps (crossings without self_collision, or cloth pushed through by pinned or handle vertices)".into());
+            }
+            if self.inside > self.tangled.inside {
+                why.push("pinned or handle vertices inside a collider".into());
+            }
+            out.push(format!(
+                "frame 0 intersects after the pre-roll ({} intersecting cloth triangle pairs, {} vertices inside colliders), which the steps do not undo: {}",
+                self.intersecting_pairs,
+                self.inside,
+                why.join("; ")
             ));
         }
         if let Some((count @ 1.., closest)) = self.close_pairs {
@@ -137,6 +163,66 @@ mod tests {
             "{}",
             w[0]
         );
+    }
+
+    /// After a step the close pairs are contacts, not a fault of the scene (none reported), and
+    /// crossings made since are told apart: those with a triangle in a stitched neighbourhood
+    /// (a stitch in the middle of sheet `a`) from the others. Sheet `b` starts 1 m away and,
+    /// after one step, is put back vertical through the middle of `a`.
+    #[test]
+    fn after_steps_the_crossings_by_a_seam_are_told_apart() {
+        use crate::Vec3;
+        let far = "[[cloth]]\nname = \"b\"\ndensity = 0.1\n\
+             grid = { size = [0.5, 0.5], resolution = [11, 11], center = [0.017, 0.013, 1.0], normal = [1.0, 0.0, 0.0] }\n\
+             [[stitch]]\na = { cloth = \"a\", vertices = [60] }\nb = { cloth = \"a\", vertices = [62] }\n";
+        let mut s = sim(0.01, "", far);
+        let fresh = s.start_check().unwrap();
+        assert!(!fresh.settled && fresh.intersecting_pairs == 0, "{fresh:?}");
+        assert!(fresh.close_pairs.is_some());
+        let x0 = s.positions().to_vec();
+        s.step(1e-3).unwrap();
+        let mut x = s.positions().to_vec();
+        let b = s.model().cloths()[1].offset;
+        (b..x.len()).for_each(|i| x[i] = x0[i] - Vec3::new(0.0, 0.0, 1.0));
+        s.set_positions(&x).unwrap();
+        let c = s.start_check().unwrap();
+        assert!(c.settled && c.close_pairs.is_none(), "{c:?}");
+        assert_eq!(c.intersecting_pairs, s.intersections().0);
+        // by brute force: crossing pairs with a triangle that has a vertex sharing a triangle
+        // with vertex 60 or 62
+        let tris = s.model().triangles();
+        let hood: Vec<u32> = (tris.iter())
+            .filter(|t| t.contains(&60) || t.contains(&62))
+            .flatten()
+            .copied()
+            .collect();
+        let corners = |t: [u32; 3]| t.map(|i| x[i as usize]);
+        let mut by_seam = 0;
+        for (i, &t) in tris.iter().enumerate() {
+            for &u in &tris[i + 1..] {
+                let touch = |t: [u32; 3]| t.iter().any(|p| hood.contains(p));
+                let shared = t.iter().any(|p| u.contains(p));
+                if !shared
+                    && (touch(t) || touch(u))
+                    && crate::collision::check::triangles_intersect(corners(t), corners(u))
+                {
+                    by_seam += 1;
+                }
+            }
+        }
+        assert!(
+            by_seam > 0 && by_seam < c.intersecting_pairs,
+            "{by_seam} {c:?}"
+        );
+        assert_eq!(c.by_seam, by_seam);
+        let w = c.warnings();
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].contains(&format!("{by_seam} of the pairs lie by a seam")),
+            "{}",
+            w[0]
+        );
+        assert!(w[0].contains("cloth crossed in the steps"), "{}", w[0]);
     }
 
     #[test]
