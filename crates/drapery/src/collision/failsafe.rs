@@ -15,7 +15,10 @@
 //!   that starts closer than the CCD tolerance is held if it would touch, and no pair may end
 //!   closer than a tenth of the tolerance unless it started closer (then it may not come closer
 //!   at all): pulled back step after step, a pair could otherwise creep toward touching until
-//!   rounding hid a crossing.
+//!   rounding hid a crossing;
+//! * the pairs within a seam's neighbourhood, let through the above so that the seam can
+//!   close, may not end the step crossed: the triangles by a seam that intersect at the end and
+//!   did not at the start go back to their start ([`SeamCrossings`]), and the rounds go on.
 
 use super::broad_phase::{Candidates, SweptBoxes};
 use super::bvh::{MovingBox, TreeCache};
@@ -24,6 +27,7 @@ use super::ccd::{
     vertex_triangle_may_touch, vertex_triangle_toi,
 };
 use super::distance::{point_triangle, segment_segment};
+use super::seam_crossings::SeamCrossings;
 use super::settings::Obstacle;
 use super::sweep::{Stop, obstacle_stop};
 use super::zones::{Refusal, Zones};
@@ -45,6 +49,9 @@ pub struct FailsafeReport {
     /// Swept-box builds (the first round's, and one per round where a carry moved a vertex out
     /// of its box).
     pub builds: usize,
+    /// Rounds that pulled back the triangles of a seam's neighbourhood that crossed over the
+    /// step ([`SeamCrossings`]).
+    pub seam_crossings: usize,
     /// Rounds that moved impact zones (cloth–cloth hits, see `zones`).
     pub zone_rounds: usize,
     /// Particles that started within a tenth of the thickness of (or inside) an analytic
@@ -299,6 +306,7 @@ pub fn failsafe(
     thickness: f64,
     self_collision: bool,
     exempt: &(dyn Fn(&[u32; 4]) -> bool + Sync),
+    seam_crossings: &SeamCrossings,
     cache: &mut TreeCache,
 ) -> Result<FailsafeReport, String> {
     let n = x0.len();
@@ -516,9 +524,37 @@ pub fn failsafe(
         for round in 0..max_rounds {
             report.rounds += 1;
             if hits.is_empty() {
-                x1.copy_from_slice(&ye[..n]);
-                report.candidates = tested.into_inner();
-                return Ok(report);
+                // the pairs by a seam that crossed over the step go back to their start
+                // (`SeamCrossings`), but for vertices that move otherwise (pinned, carried by
+                // an obstacle, or in a group that follows a carried one)
+                moved.iter_mut().for_each(|m| *m = false);
+                let crossed = match self_collision {
+                    true => seam_crossings.new_crossings(triangles, x0, &ye[..n]),
+                    false => Vec::new(),
+                };
+                for [a, b] in crossed {
+                    let ids = triangles[a as usize]
+                        .into_iter()
+                        .chain(triangles[b as usize]);
+                    for i in ids.map(|i| i as usize) {
+                        let free = !pinned[i] && carried[i].is_none() && groups.root(i) == i;
+                        if free && ye[i] != x0[i] {
+                            (frac[i], ye[i], moved[i]) = (0.0, x0[i], true);
+                        }
+                    }
+                }
+                if !moved.iter().any(|&m| m) {
+                    x1.copy_from_slice(&ye[..n]);
+                    report.candidates = tested.into_inner();
+                    return Ok(report);
+                }
+                report.seam_crossings += 1;
+                report.pairs = None;
+                // from here on hits are pulled back, not zoned: a zone could move these
+                // vertices off their start again
+                zones = None;
+                hits.extend(all_hits(&boxes.touching(&moved, &ys0, &ye), &ye));
+                continue;
             }
             report.ccd_hits += hits.len();
             moved.iter_mut().for_each(|m| *m = false);
@@ -749,7 +785,7 @@ mod tests {
             let carry = Vec3::new(0.016, 0.0, 0.0);
             x1.iter_mut().for_each(|p| *p += carry);
             let pinned = vec![false; x0.len()];
-            let r = failsafe(&x0, &mut x1, &pinned, &tris, &edges, &[], 0.0, 0.01, 0.005, true, &|_| false, &mut TreeCache::default()).unwrap();
+            let r = failsafe(&x0, &mut x1, &pinned, &tris, &edges, &[], 0.0, 0.01, 0.005, true, &|_| false, &SeamCrossings::default(), &mut TreeCache::default()).unwrap();
             prop_assert!(r.ccd_hits > 0 && r.zone_rounds > 0, "{:?}", r);
             prop_assert_eq!(count_self_intersections(&x1, &tris), 0);
             for (a, b) in x0.iter().zip(&x1) {
@@ -767,7 +803,7 @@ mod tests {
             let (x0, mut x1, tris, edges) = crossing_sheets(seed, n, depth);
             let thickness = 0.01;
             let pinned = vec![false; x0.len()];
-            let r = failsafe(&x0, &mut x1, &pinned, &tris, &edges, &[], 0.0, 0.01, thickness, true, &|_| false, &mut TreeCache::default()).unwrap();
+            let r = failsafe(&x0, &mut x1, &pinned, &tris, &edges, &[], 0.0, 0.01, thickness, true, &|_| false, &SeamCrossings::default(), &mut TreeCache::default()).unwrap();
             prop_assert_eq!(r.pairs.is_some(), r.ccd_hits == 0);
             if let Some(p) = r.pairs {
                 let listed = candidates(&x1, &x1, &tris, &edges, thickness);
@@ -818,6 +854,7 @@ mod tests {
             0.01,
             true,
             &|_| false,
+            &SeamCrossings::default(),
             &mut TreeCache::default(),
         )
         .unwrap();
@@ -851,7 +888,7 @@ mod tests {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                 pool.install(|| {
                     let mut got = x1.clone();
-                    let r = failsafe(&x0, &mut got, &pinned, &tris, &edges, &[], 0.0, 0.01, 0.005, true, &|_| false, &mut TreeCache::default());
+                    let r = failsafe(&x0, &mut got, &pinned, &tris, &edges, &[], 0.0, 0.01, 0.005, true, &|_| false, &SeamCrossings::default(), &mut TreeCache::default());
                     (got, r)
                 })
             };
@@ -902,6 +939,7 @@ mod tests {
                 thickness,
                 true,
                 &|_| false,
+                &SeamCrossings::default(),
                 &mut TreeCache::default(),
             );
             r.unwrap();
@@ -968,6 +1006,7 @@ mod tests {
                 0.004,
                 true,
                 &|_| false,
+                &SeamCrossings::default(),
                 &mut TreeCache::default(),
             );
             (r, x)
@@ -994,6 +1033,60 @@ mod tests {
         assert_eq!((r.unwrap().ccd_hits, x), (0, x0.clone()));
     }
 
+    /// Everything let through, as within a seam's neighbourhood: a square lowered through
+    /// another over the step ends crossed, unless the pairs by a seam are checked
+    /// ([`SeamCrossings`]); then the lowered square is back at its start, the other unmoved.
+    #[test]
+    fn a_seam_neighbourhood_that_would_cross_is_pulled_back() {
+        use crate::collision::seam_crossings::tests::squares;
+        use crate::collision::seams::Seams;
+        let ((x0, tris), (x1, _)) = (squares(0.0), squares(0.3));
+        let edges = [
+            [0, 1],
+            [1, 2],
+            [2, 0],
+            [1, 3],
+            [3, 2],
+            [4, 5],
+            [5, 6],
+            [6, 4],
+            [5, 7],
+            [7, 6],
+        ];
+        let within = [[0, 1], [4, 5]];
+        let seams = Seams::new(8, &tris, &within);
+        let guard = SeamCrossings::new(8, &tris, &within, &seams);
+        let end = |guard: &SeamCrossings| {
+            let mut x = x1.clone();
+            let (pinned, cache) = (vec![false; 8], &mut TreeCache::default());
+            let r = failsafe(
+                &x0,
+                &mut x,
+                &pinned,
+                &tris,
+                &edges,
+                &[],
+                0.0,
+                0.01,
+                0.005,
+                true,
+                &|_| true,
+                guard,
+                cache,
+            );
+            (x, r.unwrap())
+        };
+        let (crossed, r) = end(&SeamCrossings::default());
+        assert_eq!(
+            (count_self_intersections(&crossed, &tris), r.seam_crossings),
+            (3, 0)
+        );
+        let (x, r) = end(&guard);
+        assert_eq!(count_self_intersections(&x, &tris), 0);
+        assert_eq!(r.seam_crossings, 1);
+        assert_eq!(x, x0);
+    }
+
     #[test]
     fn a_pair_that_cannot_be_pulled_back_is_an_error_not_a_loop() {
         // a pinned triangle and a pinned vertex: the vertex passes through the triangle, and
@@ -1013,6 +1106,7 @@ mod tests {
             0.005,
             true,
             &|_| false,
+            &SeamCrossings::default(),
             &mut TreeCache::default(),
         )
         .unwrap_err();

@@ -35,6 +35,7 @@ mod pair_sort;
 pub mod predicates;
 pub mod proximity;
 pub mod repulsion;
+pub mod seam_crossings;
 pub mod seams;
 pub mod settings;
 mod sweep;

@@ -6,6 +6,7 @@
 use super::pose::Pose;
 use crate::collision::bvh::TreeCache;
 use crate::collision::failsafe::{FailsafeReport, failsafe};
+use crate::collision::seam_crossings::SeamCrossings;
 use crate::collision::settings::CollisionSettings;
 use crate::math::Vec3;
 use crate::model::Model;
@@ -22,6 +23,7 @@ pub(crate) fn run(
     edges: &[[u32; 2]],
     pose: &Pose,
     exempt: &(dyn Fn(&[u32; 4]) -> bool + Sync),
+    seam_crossings: &SeamCrossings,
     x0: &[Vec3],
     x: &mut [Vec3],
     v: &mut [Vec3],
@@ -41,6 +43,7 @@ pub(crate) fn run(
         settings.thickness,
         settings.self_collision,
         exempt,
+        seam_crossings,
         cache,
     )?;
     let mut keep_velocity = vec![false; x.len()];
@@ -87,6 +90,7 @@ mod tests {
             &[],
             &pose,
             &|_| false,
+            &SeamCrossings::default(),
             &x0,
             &mut x,
             &mut v,
@@ -127,6 +131,7 @@ mod tests {
                 &edges,
                 &pose,
                 &|ids| seams.exempt(ids),
+                &SeamCrossings::default(),
                 &x0,
                 &mut x,
                 &mut v,

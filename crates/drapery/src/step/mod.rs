@@ -47,6 +47,7 @@ pub use tangles::Tangled;
 use crate::animation::Motion;
 use crate::collision::broad_phase::Candidates;
 use crate::collision::bvh::TreeCache;
+use crate::collision::seam_crossings::SeamCrossings;
 use crate::collision::seams::Seams;
 use crate::constraints::obstacle::{self, ActiveSet};
 use crate::constraints::strain_limit::StrainLimits;
@@ -91,6 +92,8 @@ pub struct Simulation {
     edges: Vec<[u32; 2]>,
     /// The stitched neighbourhoods exempt from cloth–cloth contact.
     seams: Seams,
+    /// The triangles by the seams, whose crossings over a step the fail-safe undoes.
+    seam_crossings: SeamCrossings,
     /// The edges of the cloths that have a strain limit.
     strain_limits: StrainLimits,
     /// Cloth that started inside colliders or crossed, still being untangled (part of the
@@ -144,6 +147,7 @@ impl Simulation {
         let initial = (model.x.clone(), model.v.clone());
         let stitched: Vec<[u32; 2]> = model.stitches.iter().map(|p| [p.a, p.b]).collect();
         let seams = Seams::new(n, &triangles, &stitched);
+        let seam_crossings = SeamCrossings::new(n, &triangles, &stitched, &seams);
         let strain_limits = StrainLimits::of(&model);
         let scene_motions = model.motions();
         Ok(Simulation {
@@ -159,6 +163,7 @@ impl Simulation {
             triangles,
             edges,
             seams,
+            seam_crossings,
             strain_limits,
             tangles: Tangles::default(),
             trees: Trees::default(),
@@ -380,6 +385,7 @@ impl Simulation {
                     &self.edges,
                     &pose,
                     &|ids| self.seams.exempt(ids) || tangles.exempt(ids, n),
+                    &self.seam_crossings,
                     &start.x0,
                     &mut x,
                     &mut v,

@@ -50,7 +50,7 @@ impl StartCheck {
         } else if self.intersects_untreated() {
             let mut why = Vec::new();
             if self.by_seam > 0 {
-                why.push(format!("{} of the pairs lie by a seam: its neighbourhood is let through itself so that it can close, and it closed crossed (for a garment, try another edge_length)", self.by_seam));
+                why.push(format!("{} of the pairs lie by a seam: its neighbourhood is let through itself so that it can close, and pinned vertices or vertices pressed by a collider crossed it (for a garment, try another edge_length)", self.by_seam));
             }
             if self.intersecting_pairs > self.tangled.crossings + self.by_seam {
                 why.push("cloth crossed in the steps (crossings without self_collision, or cloth pushed through by pinned or handle vertices)".into());

@@ -41,6 +41,7 @@ use crate::collision::bvh::TreeCache;
 use crate::collision::colliders::{Collider, Motion, Shape, TriangleMesh};
 use crate::collision::failsafe::failsafe;
 use crate::collision::predicates::orient3d;
+use crate::collision::seam_crossings::SeamCrossings;
 use crate::collision::settings::Obstacle;
 use crate::math::Vec3;
 use glam::DQuat;
@@ -629,6 +630,7 @@ fn failsafe_keeps_particles_on_their_side_of_a_moving_mesh() {
         0.005,
         false,
         &|_| false,
+        &SeamCrossings::default(),
         &mut TreeCache::default(),
     )
     .unwrap();
