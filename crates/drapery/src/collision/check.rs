@@ -42,16 +42,7 @@ pub fn sewn_intersecting_pairs(
     triangles: &[[u32; 3]],
     stitches: &[[u32; 2]],
 ) -> Vec<[u32; 2]> {
-    // each vertex's representative: the smallest vertex it is sewn to, through any chain
-    let mut rep: Vec<u32> = (0..x.len() as u32).collect();
-    use super::union_find::root;
-    for &[a, b] in stitches {
-        let (ra, rb) = (root(&mut rep, a), root(&mut rep, b));
-        rep[ra.max(rb) as usize] = ra.min(rb);
-    }
-    for v in 0..rep.len() as u32 {
-        rep[v as usize] = root(&mut rep, v);
-    }
+    let rep = sewn_representatives(x.len(), stitches);
     let boxes = tri_boxes(x, triangles);
     let mut pairs = overlapping_pairs(&boxes)
         .par_iter()
@@ -64,6 +55,21 @@ pub fn sewn_intersecting_pairs(
         .collect::<Vec<_>>();
     pairs.sort_unstable();
     pairs
+}
+
+/// Each of `n` vertices' representative: the smallest vertex it is sewn to by `stitches`,
+/// through any chain (itself when none).
+pub(crate) fn sewn_representatives(n: usize, stitches: &[[u32; 2]]) -> Vec<u32> {
+    let mut rep: Vec<u32> = (0..n as u32).collect();
+    use super::union_find::root;
+    for &[a, b] in stitches {
+        let (ra, rb) = (root(&mut rep, a), root(&mut rep, b));
+        rep[ra.max(rb) as usize] = ra.min(rb);
+    }
+    for v in 0..rep.len() as u32 {
+        rep[v as usize] = root(&mut rep, v);
+    }
+    rep
 }
 
 /// Number of intersecting pairs (triangle of `a`, triangle of `b`) between two surfaces.

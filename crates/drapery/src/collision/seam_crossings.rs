@@ -11,9 +11,8 @@
 //! does for a pair that CCD finds colliding.
 
 use super::broad_phase::{Aabb, overlapping_pairs};
-use super::check::triangles_intersect;
+use super::check::{sewn_representatives, triangles_intersect};
 use super::seams::Seams;
-use super::union_find::root;
 use crate::math::Vec3;
 use rayon::prelude::*;
 
@@ -38,14 +37,7 @@ impl SeamCrossings {
         if seams.is_empty() {
             return SeamCrossings::default();
         }
-        let mut rep: Vec<u32> = (0..n as u32).collect();
-        for &[a, b] in stitches {
-            let (ra, rb) = (root(&mut rep, a), root(&mut rep, b));
-            rep[ra.max(rb) as usize] = ra.min(rb);
-        }
-        for v in 0..n as u32 {
-            rep[v as usize] = root(&mut rep, v);
-        }
+        let rep = sewn_representatives(n, stitches);
         let tris = (0..triangles.len() as u32)
             .filter(|&t| triangles[t as usize].iter().any(|&p| seams.holds(p)))
             .collect();
