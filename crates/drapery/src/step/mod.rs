@@ -666,8 +666,11 @@ impl Simulation {
                         .iter()
                         .any(|&p| self.seams.holds(p))
                 };
-                let by_seam = pairs.iter().filter(|&&[a, b]| seam(a) || seam(b)).count();
-                (pairs.len(), if settled { by_seam } else { 0 })
+                let by_seam = match settled {
+                    true => pairs.iter().filter(|&&[a, b]| seam(a) || seam(b)).count(),
+                    false => 0,
+                };
+                (pairs.len(), by_seam)
             }
         };
         Some(StartCheck {
