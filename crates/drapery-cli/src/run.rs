@@ -270,12 +270,7 @@ pub fn run(args: RunArgs) -> Result<()> {
             .flatten();
         sim.preroll(scene.preroll_steps(), scene.step_size())
             .with_context(|| format!("{}: pre-roll", args.scene.display()))?;
-        start_check = sim.start_check().map(|mut c| {
-            if let Some(f) = fresh {
-                c.close_pairs = f.close_pairs;
-            }
-            c
-        });
+        start_check = sim.start_check().map(|c| c.with_start(fresh));
         let now = start_check.map(|c| c.tangled).unwrap_or_default();
         let before = fresh.map_or(now, |c| c.tangled);
         untangling = (before != drapery::Tangled::default()).then_some((before, now));

@@ -224,11 +224,7 @@ impl FrameRun {
     /// the scene's start (before the pre-roll, where the cloth had not yet settled into
     /// contact).
     pub fn start_check(&self) -> Option<StartCheck> {
-        let mut c = self.sim.start_check()?;
-        if let Some(f) = self.fresh.filter(|_| c.settled) {
-            c.close_pairs = f.close_pairs;
-        }
-        Some(c)
+        Some(self.sim.start_check()?.with_start(self.fresh))
     }
 
     /// The simulation, at the last frame written.

@@ -38,6 +38,17 @@ impl StartCheck {
         self.intersecting_pairs > self.tangled.crossings || self.inside > self.tangled.inside
     }
 
+    /// This check, made after a pre-roll, with the close pairs of `before`, the check of the
+    /// scene's start made before it (`None` when there was no pre-roll: this check is then the
+    /// start's and keeps its own). What `drapery run` and Python's `drapery.run` warn of at
+    /// frame 0.
+    pub fn with_start(mut self, before: Option<StartCheck>) -> StartCheck {
+        if let Some(b) = before {
+            self.close_pairs = b.close_pairs;
+        }
+        self
+    }
+
     /// One line per problem a run should be warned about (none for a clean start), without the
     /// scene's name, which the front end adds.
     pub fn warnings(&self) -> Vec<String> {
